@@ -1,0 +1,67 @@
+//! Parameter validation errors of the mesh generators.
+
+/// Largest inner-cube division count accepted by [`crate::HexMesh::spheroid_octant`]:
+/// beyond it the mesh has more than ~10^8 elements, which no caller can hold in memory.
+pub const MAX_OCTANT_DIVISIONS: usize = 256;
+
+/// Largest division count per axis accepted by [`crate::HexMesh::block`].
+pub const MAX_BLOCK_DIVISIONS: usize = 1024;
+
+/// Largest mesh level accepted by [`crate::divisions_for_level`].
+pub const MAX_LEVEL: u32 = 8;
+
+/// A mesh parameter outside its allowed range. The message names the parameter,
+/// its value (with unit where it has one) and the allowed range.
+#[derive(thiserror::Error, Debug, Clone, PartialEq)]
+pub enum MeshError {
+    /// Spheroid semi-axis along x and y.
+    #[error("a = {0} mm: must be finite and > 0")]
+    SemiAxisA(f64),
+    /// Spheroid semi-axis along z.
+    #[error("c = {0} mm: must be finite and > 0")]
+    SemiAxisC(f64),
+    /// Inner-cube division count of the octant mesh.
+    #[error("divisions = {0}: must be in 2..={MAX_OCTANT_DIVISIONS}")]
+    OctantDivisions(usize),
+    /// Grading ratio of the octant mesh.
+    #[error("grading = {0}: must be finite and >= 1")]
+    Grading(f64),
+    /// Edge length of a block along one axis.
+    #[error("lengths[{axis}] = {value} mm: must be finite and > 0")]
+    BlockLength {
+        /// Axis index 0, 1 or 2 (x, y, z).
+        axis: usize,
+        /// The rejected length \[mm\].
+        value: f64,
+    },
+    /// Division count of a block along one axis.
+    #[error("divisions[{axis}] = {value}: must be in 1..={MAX_BLOCK_DIVISIONS}")]
+    BlockDivisions {
+        /// Axis index 0, 1 or 2 (x, y, z).
+        axis: usize,
+        /// The rejected division count.
+        value: usize,
+    },
+    /// Inner-cube half-size of an explicit [`crate::OctantShape`].
+    #[error("h = {0}: must be in (0, 1) (unit sphere)")]
+    ShapeHalfSize(f64),
+    /// Inflation of an explicit [`crate::OctantShape`].
+    #[error("inflation = {0}: must be in [0, 1)")]
+    ShapeInflation(f64),
+    /// Inner-block z stretch of an explicit [`crate::OctantShape`].
+    #[error("z_stretch = {value}: must be > 0 with h * z_stretch < 1 (h = {h})")]
+    ShapeZStretch {
+        /// The rejected stretch.
+        value: f64,
+        /// The shape's half-size h.
+        h: f64,
+    },
+    /// Mesh refinement level.
+    #[error("level = {0}: must be in 1..={MAX_LEVEL}")]
+    Level(u32),
+}
+
+/// True when `v` is a usable length: finite and strictly positive.
+pub(crate) fn is_positive_length(v: f64) -> bool {
+    v.is_finite() && v > 0.0
+}

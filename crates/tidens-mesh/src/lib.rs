@@ -1,0 +1,171 @@
+//! Hexahedral meshes for tidens: one octant of a spheroidal powder particle
+//! (semi-axes a, a, c; c along z, the loading direction) centred at the origin,
+//! and plain boxes for verification tests. Lengths are in mm.
+//!
+//! ```
+//! use tidens_mesh::{HexMesh, OctantSpec};
+//! let spec = OctantSpec { a: 0.05, c: 0.04, divisions: 8, grading: 1.0 };
+//! let mesh = HexMesh::spheroid_octant(&spec)?;
+//! let exact = std::f64::consts::PI * 0.05 * 0.05 * 0.04 / 6.0;
+//! assert!((mesh.volume() - exact).abs() < 0.01 * exact);
+//! assert!(mesh.min_scaled_jacobian() > 0.2);
+//! # Ok::<(), tidens_mesh::MeshError>(())
+//! ```
+
+mod block;
+mod cubed_octant;
+mod error;
+mod grading;
+pub mod hex;
+mod quality;
+mod transform;
+
+pub use cubed_octant::{OctantShape, radial_divisions};
+pub use error::{MAX_BLOCK_DIVISIONS, MAX_LEVEL, MAX_OCTANT_DIVISIONS, MeshError};
+
+use error::is_positive_length;
+
+/// One job: hexahedral meshes of spheroid octants and boxes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HexMesh {
+    /// Node coordinates \[mm\].
+    pub nodes: Vec<[f64; 3]>,
+    /// 8-node hexahedra in VTK_HEXAHEDRON node order (bottom quad 0-1-2-3
+    /// counter-clockwise seen from the top, then 4-7 above 0-3), right-handed:
+    /// the trilinear Jacobian determinant is > 0 at every corner and Gauss point.
+    pub elements: Vec<[usize; 8]>,
+    /// Boundary quads, nodes ordered so the right-hand normal points out of the body.
+    pub boundary: Vec<BoundaryFace>,
+}
+
+/// One boundary quad of a [`HexMesh`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BoundaryFace {
+    /// Node indices, ordered so that the right-hand normal points out of the body.
+    pub nodes: [usize; 4],
+    /// The element this face belongs to.
+    pub element: usize,
+    /// Which part of the boundary the face lies on.
+    pub kind: FaceKind,
+}
+
+/// The part of the boundary a [`BoundaryFace`] lies on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaceKind {
+    /// A flat face lying in the coordinate plane `x[axis] = const` (a cut through
+    /// the particle centre, or a box face); `high` is true when the outward
+    /// normal is +e_axis.
+    Plane {
+        /// Coordinate axis 0, 1 or 2 (x, y, z) normal to the plane.
+        axis: usize,
+        /// True when the outward normal is +e_axis.
+        high: bool,
+    },
+    /// The curved free surface of a particle.
+    Curved,
+}
+
+/// Parameters of a spheroid-octant mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OctantSpec {
+    /// Semi-axis along x and y \[mm\], > 0.
+    pub a: f64,
+    /// Semi-axis along z \[mm\], > 0.
+    pub c: f64,
+    /// Elements along each edge of the inner cube, in 2..=[`MAX_OCTANT_DIVISIONS`].
+    pub divisions: usize,
+    /// At least 1; 1 = uniform; otherwise the ratio of largest to smallest element
+    /// size (of the parameter grids), refining toward the three poles
+    /// (a,0,0), (0,a,0), (0,0,c) and toward the curved surface.
+    pub grading: f64,
+}
+
+impl OctantSpec {
+    /// Checks every parameter against its allowed range.
+    pub fn validate(&self) -> Result<(), MeshError> {
+        if !is_positive_length(self.a) {
+            return Err(MeshError::SemiAxisA(self.a));
+        }
+        if !is_positive_length(self.c) {
+            return Err(MeshError::SemiAxisC(self.c));
+        }
+        if !(2..=MAX_OCTANT_DIVISIONS).contains(&self.divisions) {
+            return Err(MeshError::OctantDivisions(self.divisions));
+        }
+        if !(self.grading.is_finite() && self.grading >= 1.0) {
+            return Err(MeshError::Grading(self.grading));
+        }
+        Ok(())
+    }
+}
+
+impl HexMesh {
+    /// Mesh of the spheroid octant {x, y, z >= 0, (x^2 + y^2)/a^2 + z^2/c^2 <= 1} \[mm\].
+    ///
+    /// Boundary: `Plane { axis, high: false }` on x = 0, y = 0, z = 0 and
+    /// `Curved` on the spheroid surface. The poles, the diagonal surface point
+    /// (direction (1,1,1) before scaling by diag(a, a, c)) and the three
+    /// face-diagonal surface points are nodes; surface nodes lie on the spheroid
+    /// to rounding. The layout is [`OctantShape::for_aspect`]`(c / a)` with
+    /// [`radial_divisions`] radial layers.
+    pub fn spheroid_octant(spec: &OctantSpec) -> Result<HexMesh, MeshError> {
+        spec.validate()?;
+        Self::spheroid_octant_with_shape(spec, &OctantShape::for_aspect(spec.c / spec.a))
+    }
+
+    /// Like [`HexMesh::spheroid_octant`] with an explicit layout, for layout
+    /// studies. [`OctantShape::validate`] only rules out shapes that cannot be
+    /// built; a valid shape far from [`OctantShape::for_aspect`] can still give
+    /// poor or inverted elements.
+    pub fn spheroid_octant_with_shape(
+        spec: &OctantSpec,
+        shape: &OctantShape,
+    ) -> Result<HexMesh, MeshError> {
+        spec.validate()?;
+        shape.validate()?;
+        let layout =
+            cubed_octant::OctantLayout::new(spec.a, spec.c, spec.divisions, spec.grading, *shape);
+        Ok(cubed_octant::build(layout))
+    }
+
+    /// Uniform mesh of the box [0, Lx] x [0, Ly] x [0, Lz] \[mm\] with
+    /// `divisions[i]` elements along axis i; all six faces are
+    /// `FaceKind::Plane` (`high` on x = Lx, y = Ly, z = Lz).
+    pub fn block(lengths: [f64; 3], divisions: [usize; 3]) -> Result<HexMesh, MeshError> {
+        for axis in 0..3 {
+            if !is_positive_length(lengths[axis]) {
+                return Err(MeshError::BlockLength {
+                    axis,
+                    value: lengths[axis],
+                });
+            }
+            if !(1..=MAX_BLOCK_DIVISIONS).contains(&divisions[axis]) {
+                return Err(MeshError::BlockDivisions {
+                    axis,
+                    value: divisions[axis],
+                });
+            }
+        }
+        Ok(block::build(lengths, divisions))
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+
+    /// Number of elements.
+    pub fn element_count(&self) -> usize {
+        self.elements.len()
+    }
+}
+
+/// Mesh level -> inner-cube divisions: level 1 is the coarsest usable mesh;
+/// each level refines the element size by a factor of about sqrt(2):
+/// divisions = round(4 * 2^((level - 1) / 2)) -> 4, 6, 8, 11, 16, 23, 32, 45.
+pub fn divisions_for_level(level: u32) -> Result<usize, MeshError> {
+    if !(1..=MAX_LEVEL).contains(&level) {
+        return Err(MeshError::Level(level));
+    }
+    Ok((4.0 * 2f64.powf(f64::from(level - 1) / 2.0)).round() as usize)
+}

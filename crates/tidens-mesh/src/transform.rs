@@ -1,0 +1,75 @@
+//! Rigid transformations of a [`HexMesh`]: reflections and translations.
+
+use crate::{BoundaryFace, FaceKind, HexMesh};
+
+/// Permutation that reverses a hexahedron's handedness while keeping VTK order:
+/// it swaps the roles of xi and eta (corner 1 <-> 3, 5 <-> 7).
+const REVERSE_HEX: [usize; 8] = [0, 3, 2, 1, 4, 7, 6, 5];
+
+impl HexMesh {
+    /// Mirror image: `x_i -> -x_i` for each axis with `flip[i]`.
+    ///
+    /// After an odd number of flips each element's node order is permuted so that
+    /// it stays right-handed, and each boundary quad is reversed so that its
+    /// normal still points out of the body. `FaceKind::Plane::high` is toggled on
+    /// flipped axes. Node and element numbering are unchanged.
+    pub fn mirrored(&self, flip: [bool; 3]) -> HexMesh {
+        // `0.0 - v` rather than `-v` keeps coordinate 0 as +0.0.
+        let nodes = self
+            .nodes
+            .iter()
+            .map(|p| std::array::from_fn(|i| if flip[i] { 0.0 - p[i] } else { p[i] }))
+            .collect();
+        let odd = flip.iter().filter(|&&f| f).count() % 2 == 1;
+        let elements = if odd {
+            self.elements
+                .iter()
+                .map(|el| REVERSE_HEX.map(|i| el[i]))
+                .collect()
+        } else {
+            self.elements.clone()
+        };
+        let boundary = self
+            .boundary
+            .iter()
+            .map(|f| {
+                let nodes = if odd {
+                    [f.nodes[0], f.nodes[3], f.nodes[2], f.nodes[1]]
+                } else {
+                    f.nodes
+                };
+                let kind = match f.kind {
+                    FaceKind::Plane { axis, high } => FaceKind::Plane {
+                        axis,
+                        high: high ^ flip[axis],
+                    },
+                    FaceKind::Curved => FaceKind::Curved,
+                };
+                BoundaryFace {
+                    nodes,
+                    element: f.element,
+                    kind,
+                }
+            })
+            .collect();
+        HexMesh {
+            nodes,
+            elements,
+            boundary,
+        }
+    }
+
+    /// The mesh shifted by `offset` \[mm\].
+    pub fn translated(&self, offset: [f64; 3]) -> HexMesh {
+        let nodes = self
+            .nodes
+            .iter()
+            .map(|p| std::array::from_fn(|i| p[i] + offset[i]))
+            .collect();
+        HexMesh {
+            nodes,
+            elements: self.elements.clone(),
+            boundary: self.boundary.clone(),
+        }
+    }
+}

@@ -1,0 +1,316 @@
+//! Frictionless rigid planes, handled analytically (DESIGN.md sections 2, 5).
+//!
+//! Every box face is a rigid mirror plane normal to a coordinate axis, so a
+//! node touches it through one dof only: the dof along that axis. A dof on a
+//! face that cuts a particle (a flat mesh face) is tied to its plane
+//! (bilateral); a dof of the curved surface may touch the planes of its axis
+//! (unilateral, with an active set). A constrained dof is eliminated from the
+//! system: on a fixed plane its value is prescribed, on the piston plane it
+//! follows the piston, `u = Lz - Z + U`, and shares the piston's equation.
+//! Tangential motion is free on every plane (no friction).
+
+use crate::error::SolverError;
+use serde::{Deserialize, Serialize};
+use tidens_fem::DOF_DROPPED;
+use tidens_mesh::{FaceKind, HexMesh};
+
+/// How one dof may meet the two planes normal to its axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+enum Rule {
+    Free,
+    /// Always on the plane at the low (`high = false`) or high end.
+    Bilateral {
+        high: bool,
+    },
+    /// May come into contact with the low and/or the high plane.
+    Unilateral {
+        low: bool,
+        high: bool,
+    },
+}
+
+/// The rigid planes of a scene and the contact state of every dof.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Constraints {
+    lengths: [f64; 3],
+    /// Reference coordinate of each dof's node along the dof's axis [mm].
+    x0: Vec<f64>,
+    rules: Vec<Rule>,
+    /// For unilateral dofs: `Some(high)` while in contact with that plane.
+    contact: Vec<Option<bool>>,
+    /// Active-set changes of each dof in the current step.
+    flips: Vec<u8>,
+    unilateral: Vec<usize>,
+}
+
+/// After this many active-set changes in one step a dof keeps its state for
+/// the rest of the step (stops chattering between contact and release).
+const MAX_FLIPS: u8 = 4;
+
+impl Constraints {
+    /// Classifies the dofs of `mesh` in the box `lengths` [mm]. Nodes start in
+    /// contact where they touch a plane (gap below `1e-9` of the box size).
+    pub fn new(
+        mesh: &HexMesh,
+        lengths: [f64; 3],
+        lateral_walls: bool,
+    ) -> Result<Self, SolverError> {
+        let n_dof = 3 * mesh.nodes.len();
+        let scale = lengths.iter().cloned().fold(0.0, f64::max);
+        let tol = 1e-9 * scale;
+        let plane_exists = |axis: usize, high: bool| !high || axis == 2 || lateral_walls;
+        let mut on_plane: Vec<[Option<bool>; 3]> = vec![[None; 3]; mesh.nodes.len()];
+        let mut curved = vec![false; mesh.nodes.len()];
+        for face in &mesh.boundary {
+            match face.kind {
+                FaceKind::Plane { axis, high } => {
+                    for &n in &face.nodes {
+                        on_plane[n][axis] = Some(high);
+                    }
+                }
+                FaceKind::Curved => {
+                    for &n in &face.nodes {
+                        curved[n] = true;
+                    }
+                }
+            }
+        }
+        let mut x0 = vec![0.0; n_dof];
+        let mut rules = vec![Rule::Free; n_dof];
+        for (node, p) in mesh.nodes.iter().enumerate() {
+            for axis in 0..3 {
+                let d = 3 * node + axis;
+                x0[d] = p[axis];
+                rules[d] = match on_plane[node][axis] {
+                    Some(high) if plane_exists(axis, high) => {
+                        let pos = if high { lengths[axis] } else { 0.0 };
+                        if (p[axis] - pos).abs() > tol {
+                            return Err(SolverError::Unsupported(format!(
+                                "mesh node {node} lies on a flat face at x{axis} = {} but the box plane is at {pos}",
+                                p[axis]
+                            )));
+                        }
+                        Rule::Bilateral { high }
+                    }
+                    Some(_) => Rule::Free,
+                    None if curved[node] => Rule::Unilateral {
+                        low: true,
+                        high: plane_exists(axis, true),
+                    },
+                    None => Rule::Free,
+                };
+            }
+        }
+        let unilateral: Vec<usize> = (0..n_dof)
+            .filter(|&d| matches!(rules[d], Rule::Unilateral { .. }))
+            .collect();
+        let mut c = Self {
+            lengths,
+            x0,
+            rules,
+            contact: vec![None; n_dof],
+            flips: vec![0; n_dof],
+            unilateral,
+        };
+        // Initial contacts: nodes touching a plane in the reference state.
+        for &d in &c.unilateral {
+            if let Rule::Unilateral { low, high } = c.rules[d] {
+                let axis = d % 3;
+                if high && (c.x0[d] - lengths[axis]).abs() <= tol {
+                    c.contact[d] = Some(true);
+                } else if low && c.x0[d].abs() <= tol {
+                    c.contact[d] = Some(false);
+                }
+            }
+        }
+        Ok(c)
+    }
+
+    /// Number of body dofs; the piston's equation is numbered after them.
+    pub fn dof_count(&self) -> usize {
+        self.rules.len()
+    }
+
+    /// Equation index of the piston displacement U.
+    pub fn piston_equation(&self) -> usize {
+        self.rules.len()
+    }
+
+    /// Position of the plane normal to `axis` at its `high` or low end [mm].
+    pub fn plane_position(&self, axis: usize, high: bool, piston: f64) -> f64 {
+        match (high, axis) {
+            (false, _) => 0.0,
+            (true, 2) => self.lengths[2] + piston,
+            (true, _) => self.lengths[axis],
+        }
+    }
+
+    /// The plane dof `d` is held on, if any.
+    fn held_on(&self, d: usize) -> Option<bool> {
+        match self.rules[d] {
+            Rule::Bilateral { high } => Some(high),
+            Rule::Unilateral { .. } => self.contact[d],
+            Rule::Free => None,
+        }
+    }
+
+    /// Equation of each body dof: its own, the piston's (dofs held on the
+    /// piston plane) or [`DOF_DROPPED`] (dofs held on a fixed plane).
+    pub fn equation_map(&self) -> Vec<usize> {
+        (0..self.rules.len())
+            .map(|d| match self.held_on(d) {
+                None => d,
+                Some(true) if d % 3 == 2 => self.piston_equation(),
+                Some(_) => DOF_DROPPED,
+            })
+            .collect()
+    }
+
+    /// Could dof `d` ever be held on the piston plane?
+    fn may_follow_piston(&self, d: usize) -> bool {
+        d % 3 == 2
+            && matches!(
+                self.rules[d],
+                Rule::Bilateral { high: true } | Rule::Unilateral { high: true, .. }
+            )
+    }
+
+    /// Equation cliques of the elements for every possible contact state:
+    /// the element's own dofs, plus the piston equation when any of its dofs
+    /// may follow the piston. The sparsity pattern built from them never
+    /// changes during a run.
+    pub fn element_cliques(&self, mesh: &HexMesh) -> Vec<Vec<usize>> {
+        mesh.elements
+            .iter()
+            .map(|el| {
+                let mut dofs: Vec<usize> = el
+                    .iter()
+                    .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
+                    .collect();
+                if dofs.iter().any(|&d| self.may_follow_piston(d)) {
+                    dofs.push(self.piston_equation());
+                }
+                dofs
+            })
+            .collect()
+    }
+
+    /// Puts every held dof on its plane.
+    pub fn enforce(&self, u: &mut [f64], piston: f64) {
+        for d in 0..self.rules.len() {
+            if let Some(high) = self.held_on(d) {
+                u[d] = self.plane_position(d % 3, high, piston) - self.x0[d];
+            }
+        }
+    }
+
+    /// Penetration of a free unilateral dof into a plane it may touch [mm]
+    /// (positive when inside the plane), with that plane.
+    fn penetration(&self, d: usize, u: &[f64], piston: f64) -> Option<(f64, bool)> {
+        let Rule::Unilateral { low, high } = self.rules[d] else {
+            return None;
+        };
+        let axis = d % 3;
+        let x = self.x0[d] + u[d];
+        let mut best: Option<(f64, bool)> = None;
+        if high {
+            best = Some((x - self.plane_position(axis, true, piston), true));
+        }
+        if low {
+            let p = -x;
+            if best.is_none_or(|(b, _)| p > b) {
+                best = Some((p, false));
+            }
+        }
+        best
+    }
+
+    /// Largest penetration of any free surface dof into a plane [mm].
+    pub fn max_penetration(&self, u: &[f64], piston: f64) -> f64 {
+        self.unilateral
+            .iter()
+            .filter(|&&d| self.contact[d].is_none())
+            .filter_map(|&d| self.penetration(d, u, piston).map(|(p, _)| p))
+            .fold(0.0, f64::max)
+    }
+
+    /// Updates the active set from the current state: free dofs that have
+    /// penetrated a plane by more than `gap_tol` [mm] come into contact (and
+    /// are put on it), dofs in contact whose reaction has become tensile by
+    /// more than `force_tol` [N] are released. `f_int` is the internal force of
+    /// the body; on a held dof it is the force the plane exerts. Returns the
+    /// number of changes.
+    pub fn update(
+        &mut self,
+        u: &mut [f64],
+        piston: f64,
+        f_int: &[f64],
+        force_tol: f64,
+        gap_tol: f64,
+    ) -> usize {
+        let mut changes = 0;
+        for k in 0..self.unilateral.len() {
+            let d = self.unilateral[k];
+            if self.flips[d] >= MAX_FLIPS {
+                continue;
+            }
+            match self.contact[d] {
+                Some(high) => {
+                    // The plane pushes toward the box interior: -e on the high
+                    // plane, +e on the low one. Anything else is tension.
+                    let tensile = if high {
+                        f_int[d] > force_tol
+                    } else {
+                        f_int[d] < -force_tol
+                    };
+                    if tensile {
+                        self.contact[d] = None;
+                        self.flips[d] += 1;
+                        changes += 1;
+                    }
+                }
+                None => {
+                    if let Some((p, high)) = self.penetration(d, u, piston) {
+                        if p > gap_tol {
+                            self.contact[d] = Some(high);
+                            u[d] = self.plane_position(d % 3, high, piston) - self.x0[d];
+                            self.flips[d] += 1;
+                            changes += 1;
+                        }
+                    }
+                }
+            }
+        }
+        changes
+    }
+
+    /// Starts a new step: every dof may change its contact state again.
+    pub fn reset_flips(&mut self) {
+        self.flips.fill(0);
+    }
+
+    /// Contact state of the unilateral dofs, to save and restore around a step.
+    pub fn contact_state(&self) -> Vec<Option<bool>> {
+        self.contact.clone()
+    }
+
+    pub fn set_contact_state(&mut self, state: Vec<Option<bool>>) {
+        self.contact = state;
+    }
+
+    /// Number of surface dofs in contact with each plane, indexed `2 axis + high`.
+    pub fn contact_counts(&self) -> [usize; 6] {
+        let mut c = [0; 6];
+        for &d in &self.unilateral {
+            if let Some(high) = self.contact[d] {
+                c[2 * (d % 3) + high as usize] += 1;
+            }
+        }
+        c
+    }
+
+    /// True for dofs held on a plane (bilateral or in contact).
+    pub fn is_held(&self, d: usize) -> bool {
+        self.held_on(d).is_some()
+    }
+}

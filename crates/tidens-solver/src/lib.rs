@@ -1,0 +1,24 @@
+//! The tidens solver driver (units: mm, N, MPa, s).
+//!
+//! [`Simulation`] (the entry type) presses a [`Scene`] (a meshed [`Cell`] or a
+//! verification block) in a rigid die: frictionless rigid planes handled
+//! analytically ([`constraints`]), the piston displacement as one extra
+//! unknown loaded by `f sigma(t) Lx Ly` ([`LoadHistory`]), implicit
+//! backward-Euler steps solved by Newton with line search and faer sparse
+//! Cholesky ([`linear`]), and an adaptive step size with a per-step estimate
+//! of the time-discretisation error ([`Settings::tolerance`]).
+
+pub mod constraints;
+mod error;
+pub mod linear;
+mod load;
+mod scene;
+mod settings;
+mod simulation;
+
+pub use error::SolverError;
+pub use load::LoadHistory;
+pub use scene::{ASPECT_RANGE, Cell, MeshOptions, Octant, Scene};
+pub use settings::{NewtonSettings, Settings};
+pub use simulation::{CurvePoint, Fields, RunStats, Simulation, Status};
+pub use tidens_material::{Material, Preset};

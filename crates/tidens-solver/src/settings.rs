@@ -1,0 +1,176 @@
+//! Every solver knob in one place, with documented defaults.
+
+use crate::error::SolverError;
+use crate::load::LoadHistory;
+use serde::{Deserialize, Serialize};
+
+/// Newton iteration settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct NewtonSettings {
+    /// Iterations before a step is cut back (default 25).
+    pub max_iterations: usize,
+    /// Converged when every residual entry (nodal force, and the piston's
+    /// force balance) is below this fraction of the applied piston force
+    /// (default 1e-6). During the ramp the force is floored at 1e-3 of its
+    /// final value, so the unloaded start has an absolute tolerance.
+    pub residual_tolerance: f64,
+    /// Start each step from the displacement extrapolated from the previous
+    /// two steps (default true).
+    pub extrapolate: bool,
+}
+
+impl Default for NewtonSettings {
+    fn default() -> Self {
+        Self {
+            max_iterations: 25,
+            residual_tolerance: 1e-6,
+            extrapolate: true,
+        }
+    }
+}
+
+/// Time stepping and stop conditions.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Settings {
+    pub load: LoadHistory,
+    /// Stop when the relative density reaches this value.
+    pub until_density: Option<f64>,
+    /// Stop at this time [s].
+    pub until_time: Option<f64>,
+    /// Time-integration accuracy: the target relative error of the times
+    /// t(rho) from the backward-Euler steps (default 0.005). Each step's error
+    /// estimate, half the step times the change of the log of the
+    /// densification rate over it, weighted by the load factor to the n, is
+    /// held below `tolerance` times the step.
+    pub tolerance: f64,
+    /// Largest equivalent plastic strain increment allowed at any Gauss point
+    /// in one step (default 0.2): a robustness limit for Newton.
+    pub max_strain_increment: f64,
+    /// First time step [s]; by default 1/50 of the ramp, and at most 1e-4 of
+    /// the time for unit creep strain at the applied stress.
+    pub dt_initial: Option<f64>,
+    /// Largest time step [s] (default unbounded).
+    pub dt_max: f64,
+    /// Smallest time step [s] before giving up (default 1e-12 of the initial).
+    pub dt_min: Option<f64>,
+    /// Step limit (default 100000).
+    pub max_steps: usize,
+    /// Times at which a step must end (e.g. snapshot times) [s].
+    pub time_targets: Vec<f64>,
+    pub newton: NewtonSettings,
+}
+
+impl Settings {
+    /// Settings with defaults for a load history.
+    pub fn new(load: LoadHistory) -> Self {
+        Self {
+            load,
+            until_density: None,
+            until_time: None,
+            tolerance: 0.005,
+            max_strain_increment: 0.2,
+            dt_initial: None,
+            dt_max: f64::INFINITY,
+            dt_min: None,
+            max_steps: 100_000,
+            time_targets: Vec::new(),
+            newton: NewtonSettings::default(),
+        }
+    }
+
+    /// Checks every value against its allowed range.
+    pub fn validate(&self) -> Result<(), SolverError> {
+        let l = &self.load;
+        if !(l.stress.is_finite() && l.stress > 0.0 && l.stress <= 1e4) {
+            return Err(SolverError::parameter(
+                "stress",
+                l.stress,
+                "in (0, 1e4] MPa",
+            ));
+        }
+        if !(l.knockdown.is_finite() && l.knockdown > 0.0 && l.knockdown <= 1.0) {
+            return Err(SolverError::parameter(
+                "knockdown",
+                l.knockdown,
+                "in (0, 1]",
+            ));
+        }
+        if !(l.ramp_time.is_finite() && l.ramp_time >= 0.0) {
+            return Err(SolverError::parameter("ramp_time", l.ramp_time, ">= 0 s"));
+        }
+        if self.until_density.is_none() && self.until_time.is_none() {
+            return Err(SolverError::parameter(
+                "until_density",
+                f64::NAN,
+                "given (in (rho0, 1)), or until_time given (> 0 s)",
+            ));
+        }
+        if let Some(r) = self.until_density {
+            if !(r > 0.0 && r < 1.0) {
+                return Err(SolverError::parameter("until_density", r, "in (rho0, 1)"));
+            }
+        }
+        if let Some(t) = self.until_time {
+            if !(t.is_finite() && t > 0.0) {
+                return Err(SolverError::parameter("until_time", t, "> 0 s and finite"));
+            }
+        }
+        if !(self.tolerance >= 1e-6 && self.tolerance <= 0.5) {
+            return Err(SolverError::parameter(
+                "tolerance",
+                self.tolerance,
+                "in [1e-6, 0.5]",
+            ));
+        }
+        if !(self.max_strain_increment > 0.0 && self.max_strain_increment <= 2.0) {
+            return Err(SolverError::parameter(
+                "max_strain_increment",
+                self.max_strain_increment,
+                "in (0, 2]",
+            ));
+        }
+        if let Some(dt) = self.dt_initial {
+            if !(dt.is_finite() && dt > 0.0) {
+                return Err(SolverError::parameter("dt_initial", dt, "> 0 s"));
+            }
+        }
+        if !(self.dt_max > 0.0) {
+            return Err(SolverError::parameter("dt_max", self.dt_max, "> 0 s"));
+        }
+        if let Some(dt) = self.dt_min {
+            if !(dt.is_finite() && dt > 0.0) {
+                return Err(SolverError::parameter("dt_min", dt, "> 0 s"));
+            }
+        }
+        if self.max_steps == 0 {
+            return Err(SolverError::parameter("max_steps", 0.0, ">= 1"));
+        }
+        if let Some(t) = self
+            .time_targets
+            .iter()
+            .find(|t| !(t.is_finite() && **t > 0.0))
+        {
+            return Err(SolverError::parameter(
+                "time_targets",
+                *t,
+                "all > 0 s and finite",
+            ));
+        }
+        let nw = &self.newton;
+        if !(1..=1000).contains(&nw.max_iterations) {
+            return Err(SolverError::parameter(
+                "newton.max_iterations",
+                nw.max_iterations as f64,
+                "in [1, 1000]",
+            ));
+        }
+        if !(nw.residual_tolerance >= 1e-14 && nw.residual_tolerance <= 1e-2) {
+            return Err(SolverError::parameter(
+                "newton.residual_tolerance",
+                nw.residual_tolerance,
+                "in [1e-14, 1e-2]",
+            ));
+        }
+        Ok(())
+    }
+}

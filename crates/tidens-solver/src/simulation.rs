@@ -1,0 +1,663 @@
+//! The time-stepping driver: implicit backward-Euler steps solved by Newton
+//! with line search, adaptive step size, and the densification curve.
+
+use crate::constraints::Constraints;
+use crate::error::SolverError;
+use crate::linear::{FactorizationCounts, LinearSolver};
+use crate::scene::Scene;
+use crate::settings::Settings;
+use serde::{Deserialize, Serialize};
+use tidens_fem::{Body, BodyEvaluation, DOF_DROPPED, ElementFields, SparseSystem};
+use tidens_material::Material;
+
+/// One converged step of the densification curve.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CurvePoint {
+    /// Time [s].
+    pub time: f64,
+    /// Relative density: particle volume over current cell volume.
+    pub rel_density: f64,
+    /// Piston displacement U [mm] (negative in compression).
+    pub piston_displacement: f64,
+    /// Applied nominal stress sigma(t) [MPa].
+    pub applied_stress: f64,
+    /// Stress acting on the cell, f sigma(t) [MPa].
+    pub cell_stress: f64,
+    /// Step number (0 for the initial state).
+    pub step: usize,
+    /// Newton iterations of this step (cut-back attempts included).
+    pub newton_iterations: usize,
+    /// Newton iterations since the start.
+    pub newton_total: usize,
+    /// Time step [s].
+    pub dt: f64,
+    /// Largest equivalent plastic strain increment at a Gauss point.
+    pub max_strain_increment: f64,
+    /// Current particle volume [mm^3].
+    pub particle_volume: f64,
+    /// Estimated error of `time` from the time discretisation [s]: the sum of
+    /// the per-step backward-Euler errors (positive when `time` is late).
+    pub time_error: f64,
+    /// Surface dofs in contact with a rigid plane.
+    pub contacts: usize,
+    /// Largest penetration of a free surface node into a rigid plane [mm].
+    pub max_penetration: f64,
+}
+
+/// Why a run stopped, or that it goes on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Status {
+    Running,
+    ReachedDensity,
+    ReachedTime,
+}
+
+/// Node and element fields of the last converged state, for output.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fields {
+    /// Current node coordinates [mm].
+    pub points: Vec<[f64; 3]>,
+    /// Node displacements [mm].
+    pub displacement: Vec<[f64; 3]>,
+    /// Force exerted by the rigid planes on each node [N].
+    pub contact_force: Vec<[f64; 3]>,
+    /// Hexahedra (VTK order).
+    pub cells: Vec<[usize; 8]>,
+    /// Element fields (von Mises, mean stress, equivalent plastic strain).
+    pub element: ElementFields,
+}
+
+/// Totals of a run so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RunStats {
+    pub steps: usize,
+    pub newton_iterations: usize,
+    pub rejected_steps: usize,
+    pub failed_attempts: usize,
+    pub factorizations: FactorizationCounts,
+    /// Wall time in element evaluations (residual and tangent) [s].
+    pub evaluation_seconds: f64,
+    /// Wall time scattering element matrices into the sparse system [s].
+    pub assembly_seconds: f64,
+    /// Wall time in sparse factorisations and solves [s].
+    pub linear_seconds: f64,
+}
+
+/// A converged Newton solve of one step.
+struct Solved {
+    u: Vec<f64>,
+    piston: f64,
+    eval: BodyEvaluation,
+    f_int: Vec<f64>,
+    iterations: usize,
+}
+
+/// A failed Newton solve.
+struct Failed {
+    reason: String,
+    iterations: usize,
+}
+
+/// A hot-pressing simulation of one scene.
+pub struct Simulation {
+    lengths: [f64; 3],
+    body: Body,
+    constraints: Constraints,
+    system: SparseSystem,
+    linear: LinearSolver,
+    settings: Settings,
+    dt_min: f64,
+    full_force: f64,
+    // State at the last converged step.
+    time: f64,
+    u: Vec<f64>,
+    piston: f64,
+    previous: Option<(Vec<f64>, f64, f64)>,
+    last_rate: Option<f64>,
+    dt_next: f64,
+    time_error: f64,
+    f_int: Vec<f64>,
+    fields: ElementFields,
+    curve: Vec<CurvePoint>,
+    stats: RunStats,
+    status: Status,
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+impl Simulation {
+    /// Sets up a simulation of `scene` made of `material`.
+    pub fn new(scene: &Scene, material: Material, settings: Settings) -> Result<Self, SolverError> {
+        settings.validate()?;
+        let material = Material::new(
+            material.young,
+            material.poisson,
+            material.creep_c,
+            material.creep_n,
+        )?;
+        let body = Body::new(
+            scene.mesh.nodes.clone(),
+            scene.mesh.elements.clone(),
+            material,
+        )?;
+        let constraints = Constraints::new(&scene.mesh, scene.lengths, scene.lateral_walls)?;
+        let cliques = constraints.element_cliques(&scene.mesh);
+        let n_eq = constraints.dof_count() + 1;
+        let system = SparseSystem::from_cliques(n_eq, cliques.iter().map(|c| c.as_slice()));
+        let [lx, ly, lz] = scene.lengths;
+        let full_force = settings.load.knockdown * settings.load.stress * lx * ly;
+        let rho = body.reference_volume() / (lx * ly * lz);
+        if let Some(target) = settings.until_density {
+            if target <= rho {
+                return Err(SolverError::parameter(
+                    "until_density",
+                    target,
+                    format!("in ({rho:.5}, 1): above the initial density of the mesh"),
+                ));
+            }
+        }
+        let creep_time = 1.0 / material.creep_rate(settings.load.knockdown * settings.load.stress);
+        let dt0 = settings.dt_initial.unwrap_or_else(|| {
+            let ramp = settings.load.ramp_time;
+            let guess = 1e-4 * creep_time;
+            if ramp > 0.0 {
+                guess.min(ramp / 50.0)
+            } else {
+                guess
+            }
+        });
+        let dt_min = settings.dt_min.unwrap_or(1e-12 * dt0);
+        let n_dof = constraints.dof_count();
+        let eval = body.evaluate(&vec![0.0; n_dof], 0.0, false)?;
+        let mut sim = Self {
+            lengths: scene.lengths,
+            body,
+            constraints,
+            system,
+            linear: LinearSolver::default(),
+            settings,
+            dt_min,
+            full_force,
+            time: 0.0,
+            u: vec![0.0; n_dof],
+            piston: 0.0,
+            previous: None,
+            last_rate: None,
+            dt_next: dt0,
+            time_error: 0.0,
+            f_int: vec![0.0; n_dof],
+            fields: eval.fields(),
+            curve: Vec::new(),
+            stats: RunStats::default(),
+            status: Status::Running,
+        };
+        let point = sim.curve_point(eval.volume(), 0, 0, 0.0, 0.0);
+        sim.curve.push(point);
+        Ok(sim)
+    }
+
+    /// The densification curve so far (the initial state first).
+    pub fn curve(&self) -> &[CurvePoint] {
+        &self.curve
+    }
+
+    pub fn status(&self) -> Status {
+        self.status
+    }
+
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    pub fn stats(&self) -> RunStats {
+        let mut s = self.stats;
+        s.factorizations = self.linear.counts;
+        s
+    }
+
+    /// Degrees of freedom: free displacement components plus the piston, at
+    /// the current contact state.
+    pub fn degrees_of_freedom(&self) -> usize {
+        self.constraints
+            .equation_map()
+            .iter()
+            .enumerate()
+            .filter(|&(d, &m)| m == d)
+            .count()
+            + 1
+    }
+
+    /// Box edge lengths [mm].
+    pub fn lengths(&self) -> [f64; 3] {
+        self.lengths
+    }
+
+    pub fn body(&self) -> &Body {
+        &self.body
+    }
+
+    /// Current relative density.
+    pub fn rel_density(&self) -> f64 {
+        self.curve.last().map_or(0.0, |p| p.rel_density)
+    }
+
+    fn density_of(&self, volume: f64, piston: f64) -> f64 {
+        let [lx, ly, lz] = self.lengths;
+        volume / (lx * ly * (lz + piston))
+    }
+
+    fn curve_point(
+        &self,
+        volume: f64,
+        step: usize,
+        iterations: usize,
+        dt: f64,
+        max_dp: f64,
+    ) -> CurvePoint {
+        let load = &self.settings.load;
+        CurvePoint {
+            time: self.time,
+            rel_density: self.density_of(volume, self.piston),
+            piston_displacement: self.piston,
+            applied_stress: load.applied_stress(self.time),
+            cell_stress: load.cell_stress(self.time),
+            step,
+            newton_iterations: iterations,
+            newton_total: self.stats.newton_iterations,
+            dt,
+            max_strain_increment: max_dp,
+            particle_volume: volume,
+            time_error: self.time_error,
+            contacts: self.constraints.contact_counts().iter().sum(),
+            max_penetration: self.constraints.max_penetration(&self.u, self.piston),
+        }
+    }
+
+    /// Fields of the last converged state.
+    pub fn fields(&self) -> Fields {
+        let nodes = self.body.nodes();
+        let mut points = Vec::with_capacity(nodes.len());
+        let mut displacement = Vec::with_capacity(nodes.len());
+        let mut contact_force = Vec::with_capacity(nodes.len());
+        for (a, p) in nodes.iter().enumerate() {
+            let u = [self.u[3 * a], self.u[3 * a + 1], self.u[3 * a + 2]];
+            points.push([p[0] + u[0], p[1] + u[1], p[2] + u[2]]);
+            displacement.push(u);
+            contact_force.push([0, 1, 2].map(|i| {
+                let d = 3 * a + i;
+                if self.constraints.is_held(d) {
+                    self.f_int[d]
+                } else {
+                    0.0
+                }
+            }));
+        }
+        Fields {
+            points,
+            displacement,
+            contact_force,
+            cells: self.body.elements().to_vec(),
+            element: self.fields.clone(),
+        }
+    }
+
+    /// The stop condition, if met by the last converged state.
+    fn check_stop(&mut self) {
+        let rho = self.rel_density();
+        if self.settings.until_density.is_some_and(|r| rho >= r) {
+            self.status = Status::ReachedDensity;
+        } else if self
+            .settings
+            .until_time
+            .is_some_and(|t| self.time >= t * (1.0 - 1e-12))
+        {
+            self.status = Status::ReachedTime;
+        }
+    }
+
+    /// The next time a step must end on: the end of the ramp, a requested
+    /// time, or the stop time.
+    fn next_time_target(&self) -> Option<f64> {
+        let ramp = self.settings.load.ramp_time;
+        let eps = 1e-12 * self.time.max(1e-300);
+        std::iter::once(ramp)
+            .chain(self.settings.time_targets.iter().copied())
+            .chain(self.settings.until_time)
+            .filter(|&t| t > self.time + eps)
+            .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.min(t))))
+    }
+
+    /// The step to try next: the controller's proposal, shortened to land on
+    /// time targets and not to overshoot the target density by much.
+    fn propose_dt(&self) -> f64 {
+        let mut dt = self.dt_next.min(self.settings.dt_max);
+        if let (Some(target), Some(rate)) = (self.settings.until_density, self.density_rate()) {
+            let rho = self.rel_density();
+            if rate > 0.0 && rho + rate * dt > target {
+                dt = dt.min(1.02 * (target - rho) / rate).max(self.dt_min);
+            }
+        }
+        if let Some(t) = self.next_time_target() {
+            let left = t - self.time;
+            if dt >= left * (1.0 - 1e-9) {
+                dt = left;
+            } else if dt > 0.6 * left {
+                dt = 0.5 * left;
+            }
+        }
+        dt
+    }
+
+    /// Densification rate over the last step [1/s].
+    fn density_rate(&self) -> Option<f64> {
+        let n = self.curve.len();
+        if n < 2 {
+            return None;
+        }
+        let (a, b) = (&self.curve[n - 2], &self.curve[n - 1]);
+        Some((b.rel_density - a.rel_density) / (b.time - a.time))
+    }
+
+    /// Runs until the stop condition, calling `on_step` after every converged
+    /// step; `on_step` returning false stops the run early (status stays
+    /// `Running`).
+    pub fn run(
+        &mut self,
+        mut on_step: impl FnMut(&CurvePoint) -> bool,
+    ) -> Result<Status, SolverError> {
+        while self.status == Status::Running {
+            let p = self.advance()?.clone();
+            if !on_step(&p) {
+                break;
+            }
+        }
+        Ok(self.status)
+    }
+
+    /// Advances by one converged step (cutting the step back as needed) and
+    /// returns its curve point. On failure the state stays at the last
+    /// converged step, so the curve so far is kept.
+    pub fn advance(&mut self) -> Result<&CurvePoint, SolverError> {
+        if self.status != Status::Running {
+            return self
+                .curve
+                .last()
+                .ok_or_else(|| SolverError::Linear("empty curve".into()));
+        }
+        if self.stats.steps >= self.settings.max_steps {
+            return Err(SolverError::StepLimit {
+                max_steps: self.settings.max_steps,
+                time: self.time,
+                density: self.rel_density(),
+            });
+        }
+        let mut dt = self.propose_dt();
+        let mut iterations = 0;
+        loop {
+            let contact_saved = self.constraints.contact_state();
+            let mut outcome = self.solve_step(
+                dt,
+                self.settings.newton.extrapolate && self.previous.is_some(),
+            );
+            if let Err(f) = &outcome {
+                iterations += f.iterations;
+                self.constraints.set_contact_state(contact_saved.clone());
+                if self.settings.newton.extrapolate && self.previous.is_some() {
+                    outcome = self.solve_step(dt, false);
+                }
+            }
+            match outcome {
+                Ok(solved) => {
+                    iterations += solved.iterations;
+                    match self.accept_or_reject(solved, dt, iterations) {
+                        Ok(()) => break,
+                        Err(shorter) => {
+                            self.stats.rejected_steps += 1;
+                            self.constraints.set_contact_state(contact_saved);
+                            dt = shorter;
+                        }
+                    }
+                }
+                Err(f) => {
+                    iterations += f.iterations;
+                    self.stats.failed_attempts += 1;
+                    self.constraints.set_contact_state(contact_saved);
+                    dt *= 0.25;
+                    if dt < self.dt_min {
+                        self.stats.newton_iterations += iterations;
+                        return Err(SolverError::NoConvergence {
+                            time: self.time,
+                            step: self.stats.steps + 1,
+                            dt,
+                            reason: f.reason,
+                        });
+                    }
+                }
+            }
+        }
+        self.check_stop();
+        self.curve
+            .last()
+            .ok_or_else(|| SolverError::Linear("empty curve".into()))
+    }
+
+    /// Step control on a converged step: accepts it (and proposes the next
+    /// step) or rejects it, returning the shorter step to retry.
+    fn accept_or_reject(&mut self, s: Solved, dt: f64, iterations: usize) -> Result<(), f64> {
+        let volume = s.eval.volume();
+        let max_dp = s.eval.max_dp();
+        let lz = self.lengths[2];
+        // Piston log-strain rate: the densification rate whatever the scene.
+        let rate = ((lz + self.piston) / (lz + s.piston)).ln() / dt;
+        let n = self.body.material().creep_n;
+        let t1 = self.time + dt;
+        let weight = self.settings.load.factor(t1).powf(n);
+        let tol = self.settings.tolerance;
+        // Per-step time error of backward Euler: it evaluates the rate at the
+        // end of the step, so the time it takes is off by half the step times
+        // the relative change of the rate (weighted by (sigma/sigma_max)^n:
+        // during the ramp a time shift counts at the reduced load).
+        // A step that did not move (no Newton iteration) says nothing of the rate.
+        let moved = iterations > 0 && rate.abs() * dt > 1e-12;
+        let (psi, signed_error) = match self.last_rate {
+            Some(r0) if moved && r0 > 0.0 && rate > 0.0 => {
+                let dln = (r0 / rate).ln();
+                (0.5 * dln.abs() * weight / tol, 0.5 * dt * dln * weight)
+            }
+            _ => (0.0, 0.0),
+        };
+        // Only the strain-increment limit rejects a step: the rate-change
+        // estimate also sees the jumps of the contact area when a node touches
+        // a plane, which no step size removes; it steers the next step instead.
+        let psi_dp = max_dp / self.settings.max_strain_increment;
+        if psi_dp > 2.0 && dt > 4.0 * self.dt_min {
+            return Err(dt * (0.8 / psi_dp).max(0.1));
+        }
+        let worst = psi.max(psi_dp);
+        // Accept.
+        self.stats.steps += 1;
+        self.stats.newton_iterations += iterations;
+        self.body.commit(&s.eval);
+        self.previous = Some((std::mem::take(&mut self.u), self.piston, dt));
+        self.u = s.u;
+        self.piston = s.piston;
+        self.time = t1;
+        self.time_error += signed_error;
+        self.f_int = s.f_int;
+        self.fields = s.eval.fields();
+        if moved && rate > 0.0 {
+            self.last_rate = Some(rate);
+        }
+        let newton_factor: f64 = match iterations {
+            0..=3 => 2.0,
+            4..=6 => 1.5,
+            7..=10 => 1.0,
+            _ => 0.7,
+        };
+        let accuracy_factor = if worst > 0.0 { 0.9 / worst } else { 2.0 };
+        self.dt_next = dt * newton_factor.min(accuracy_factor).clamp(0.25, 2.0);
+        let point = self.curve_point(volume, self.stats.steps, iterations, dt, max_dp);
+        self.curve.push(point);
+        Ok(())
+    }
+
+    /// Global residual: internal forces gathered into equations, plus the
+    /// piston's load term `F` (the load potential is `F U`).
+    fn residual(&self, f_int: &[f64], map: &[usize], force: f64) -> Vec<f64> {
+        let n = self.constraints.dof_count();
+        let mut r = vec![0.0; n + 1];
+        for (d, &m) in map.iter().enumerate() {
+            if m != DOF_DROPPED {
+                r[m] += f_int[d];
+            }
+        }
+        r[n] += force;
+        r
+    }
+
+    /// Newton with line search for the step to `time + dt`.
+    fn solve_step(&mut self, dt: f64, extrapolate: bool) -> Result<Solved, Failed> {
+        let t1 = self.time + dt;
+        let force = self.full_force * self.settings.load.factor(t1);
+        let tol = self.settings.newton.residual_tolerance * force.max(1e-3 * self.full_force);
+        let gap_tol = 1e-8 * self.lengths.iter().cloned().fold(0.0, f64::max);
+        let n = self.constraints.dof_count();
+        let mut u = self.u.clone();
+        let mut piston = self.piston;
+        if extrapolate {
+            if let Some((u_prev, p_prev, dt_prev)) = &self.previous {
+                let r = dt / dt_prev;
+                for (x, xp) in u.iter_mut().zip(u_prev) {
+                    *x += r * (*x - xp);
+                }
+                piston += r * (piston - p_prev);
+            }
+        }
+        self.constraints.reset_flips();
+        self.constraints.enforce(&mut u, piston);
+        let fail = |reason: String, iterations: usize| Failed { reason, iterations };
+        let eval_time = std::cell::Cell::new(0.0);
+        let evaluate = |body: &Body, u: &[f64]| {
+            let t0 = std::time::Instant::now();
+            let r = body.evaluate(u, dt, true).map_err(|e| e.to_string());
+            eval_time.set(eval_time.get() + t0.elapsed().as_secs_f64());
+            r
+        };
+        let mut eval = evaluate(&self.body, &u).map_err(|e| fail(e, 0))?;
+        let mut f_int = eval.internal_force(&self.body);
+        let mut iterations = 0;
+        let mut active_set_updates = 0;
+        loop {
+            // Contact: release tensile contacts, catch penetrating nodes.
+            if active_set_updates < 50 {
+                let changes = self
+                    .constraints
+                    .update(&mut u, piston, &f_int, tol, gap_tol);
+                if changes > 0 {
+                    active_set_updates += 1;
+                    self.constraints.enforce(&mut u, piston);
+                    eval = evaluate(&self.body, &u).map_err(|e| fail(e, iterations))?;
+                    f_int = eval.internal_force(&self.body);
+                }
+            }
+            let map = self.constraints.equation_map();
+            let r = self.residual(&f_int, &map, force);
+            let r_norm = max_abs(&r);
+            if !r_norm.is_finite() {
+                return Err(fail("non-finite residual".into(), iterations));
+            }
+            if std::env::var_os("TIDENS_DEBUG").is_some() {
+                eprintln!(
+                    "    it {iterations} |R| {r_norm:.3e} tol {tol:.3e} changes {active_set_updates} contacts {:?}",
+                    self.constraints.contact_counts()
+                );
+            }
+            if r_norm <= tol {
+                return Ok(Solved {
+                    u,
+                    piston,
+                    eval,
+                    f_int,
+                    iterations,
+                });
+            }
+            if iterations >= self.settings.newton.max_iterations {
+                return Err(fail(
+                    format!(
+                        "{iterations} Newton iterations, residual {r_norm:.3e} N > {tol:.3e} N"
+                    ),
+                    iterations,
+                ));
+            }
+            iterations += 1;
+            self.stats.evaluation_seconds += eval_time.replace(0.0);
+            let t0 = std::time::Instant::now();
+            // Tangent: element matrices scattered through the equation map;
+            // eliminated dofs keep a unit diagonal.
+            self.system.clear();
+            for (e, out) in eval.elements.iter().enumerate() {
+                self.system
+                    .add_block(&self.body.element_dofs(e), &out.tangent, &map);
+            }
+            for (d, &m) in map.iter().enumerate() {
+                if m != d {
+                    self.system.add(d, d, 1.0);
+                }
+            }
+            let mut du: Vec<f64> = r.iter().map(|x| -x).collect();
+            let t1 = std::time::Instant::now();
+            self.stats.assembly_seconds += (t1 - t0).as_secs_f64();
+            self.linear
+                .solve(&self.system, &mut du)
+                .map_err(|e| fail(e.to_string(), iterations))?;
+            self.stats.linear_seconds += t1.elapsed().as_secs_f64();
+            // Line search on the residual norm (backtracking with a quadratic
+            // model of |R(s)|^2, at most three cuts).
+            let r0_sq: f64 = r.iter().map(|x| x * x).sum();
+            let mut s = 1.0;
+            let mut best: Option<(f64, Vec<f64>, f64, BodyEvaluation, Vec<f64>)> = None;
+            for _ in 0..4 {
+                let mut ut = u.clone();
+                for d in 0..n {
+                    if map[d] == d {
+                        ut[d] += s * du[d];
+                    }
+                }
+                let pt = piston + s * du[n];
+                self.constraints.enforce(&mut ut, pt);
+                match evaluate(&self.body, &ut) {
+                    Ok(ev) => {
+                        let ft = ev.internal_force(&self.body);
+                        let rt = self.residual(&ft, &map, force);
+                        let rt_sq: f64 = rt.iter().map(|x| x * x).sum();
+                        let better = best.as_ref().is_none_or(|b| rt_sq < b.0);
+                        if better {
+                            best = Some((rt_sq, ut, pt, ev, ft));
+                        }
+                        if rt_sq <= (1.0 - 1e-4 * s) * r0_sq || max_abs(&rt) <= tol {
+                            break;
+                        }
+                        s *= (r0_sq / (rt_sq + r0_sq)).clamp(0.1, 0.5);
+                    }
+                    Err(_) => s *= 0.25,
+                }
+            }
+            let Some((_, ut, pt, ev, ft)) = best else {
+                return Err(fail(
+                    "every line-search point inverts an element".into(),
+                    iterations,
+                ));
+            };
+            u = ut;
+            piston = pt;
+            eval = ev;
+            f_int = ft;
+        }
+    }
+}

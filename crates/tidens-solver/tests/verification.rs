@@ -1,0 +1,186 @@
+//! Verification ladder (DESIGN.md section 7), items 2 and 3, and the sc cell
+//! end to end on a coarse mesh.
+
+use tidens_solver::{
+    Cell, LoadHistory, Material, MeshOptions, Preset, Scene, Settings, Simulation, Status,
+};
+
+/// Height of a Norton cube under constant force, rigid-viscoplastic:
+/// `L^-n = L0^-n + n C (F/(A0 L0))^n t_eff` (ladder item 2).
+fn analytic_height(l0: f64, c: f64, n: f64, nominal_stress: f64, t_eff: f64) -> f64 {
+    (l0.powf(-n) + n * c * (nominal_stress / l0).powf(n) * t_eff).powf(-1.0 / n)
+}
+
+/// Ladder item 2: a cube between frictionless platens, sides free, to large
+/// strain (height halved), with and without the ramp, for several n.
+#[test]
+fn cube_between_platens_follows_the_norton_height_law() {
+    let l0 = 1.0;
+    for &(n, ramp) in &[(1.0, 0.0), (2.8, 0.0), (2.8, 50.0), (5.0, 50.0)] {
+        let sigma: f64 = 10.0;
+        let c = 3e-4 / sigma.powf(n); // 3e-4 /s at the nominal stress
+        let material = Material::new(4.35e4, 0.3, c, n).unwrap();
+        let scene = Scene::free_block([l0; 3], [2, 2, 2]).unwrap();
+        let load = LoadHistory {
+            stress: sigma,
+            knockdown: 1.0,
+            ramp_time: ramp,
+        };
+        let mut settings = Settings::new(load);
+        settings.until_time = Some(1e9);
+        settings.tolerance = 0.002;
+        let mut sim = Simulation::new(&scene, material, settings).unwrap();
+        let mut worst: f64 = 0.0;
+        let mut reached = 0.0;
+        sim.run(|p| {
+            let h = l0 + p.piston_displacement;
+            let t_eff = load.effective_time(p.time, n);
+            // Compare heights where creep dominates the elastic strain (~2e-4).
+            if l0 - h > 0.02 {
+                let exact = analytic_height(l0, c, n, sigma, t_eff);
+                worst = worst.max((h / exact - 1.0).abs());
+            }
+            reached = h;
+            h > 0.5 * l0
+        })
+        .unwrap();
+        assert!(reached <= 0.5, "n={n}: stopped at height {reached}");
+        eprintln!("n={n} ramp={ramp}: worst {worst:.2e}");
+        assert!(
+            worst < 0.01,
+            "n={n} ramp={ramp}: height off the analytic law by {:.3} %",
+            100.0 * worst
+        );
+    }
+}
+
+/// Ladder item 3: a fully dense block in the rigid die does not densify; its
+/// piston strain rises monotonically from sigma/M at load-up toward sigma/K
+/// and never beyond (an element that locks stays near sigma/M, one that
+/// loses volume goes beyond sigma/K).
+#[test]
+fn dense_block_in_the_die_relaxes_from_constrained_to_bulk_modulus() {
+    let material = Preset::Ti64Creep1293K.material();
+    let (k, m) = (material.bulk_modulus(), material.constrained_modulus());
+    let sigma = 10.0;
+    let scene = Scene::die_block([1.0; 3], [3, 3, 3]).unwrap();
+    let mut settings = Settings::new(LoadHistory {
+        stress: sigma,
+        knockdown: 1.0,
+        ramp_time: 0.0,
+    });
+    // Relaxation time of the deviatoric stress ~ 1/(3 G C sigma^(n-1)).
+    settings.until_time = Some(2e6);
+    settings.dt_initial = Some(1e-3);
+    settings.tolerance = 0.02;
+    let mut sim = Simulation::new(&scene, material, settings).unwrap();
+    let mut strains = Vec::new();
+    let mut densities = Vec::new();
+    sim.run(|p| {
+        strains.push(-(1.0 + p.piston_displacement).ln());
+        densities.push(p.rel_density);
+        true
+    })
+    .unwrap();
+    assert_eq!(sim.status(), Status::ReachedTime);
+    let first = strains[0];
+    eprintln!(
+        "first/(s/M) {} last/(s/K) {} n {}",
+        strains[0] / (sigma / m),
+        strains.last().unwrap() / (sigma / k),
+        strains.len()
+    );
+    let last = *strains.last().unwrap();
+    assert!(
+        (first / (sigma / m) - 1.0).abs() < 0.01,
+        "load-up strain {first:e} vs sigma/M {:e}",
+        sigma / m
+    );
+    assert!(
+        (last / (sigma / k) - 1.0).abs() < 0.01,
+        "final strain {last:e} vs sigma/K {:e}",
+        sigma / k
+    );
+    for w in strains.windows(2) {
+        assert!(
+            w[1] >= w[0] - 1e-12 * sigma / k,
+            "piston strain decreased: {} -> {}",
+            w[0],
+            w[1]
+        );
+    }
+    let bound = sigma / k;
+    assert!(
+        strains.iter().all(|&e| e <= bound),
+        "piston strain beyond sigma/K"
+    );
+    // Dense stays dense: only elastic volume change, no densification.
+    for r in &densities {
+        assert!((r - 1.0).abs() < 1e-9, "density {r}");
+    }
+}
+
+/// The sc cell on the coarsest mesh: from pi/6 to 0.9 with a monotone
+/// density and the particle volume conserved up to its elastic change.
+#[test]
+fn sc_cell_densifies_monotonically_and_conserves_particle_volume() {
+    let material = Preset::Ti64Creep1293K.material();
+    let cell = Cell::sc(0.05, 1.0).unwrap();
+    let scene = Scene::from_cell(
+        &cell,
+        &MeshOptions {
+            level: 1,
+            grading: 1.0,
+        },
+    )
+    .unwrap();
+    let mut settings = Settings::new(LoadHistory {
+        stress: 10.0,
+        knockdown: 1.0,
+        ramp_time: 1.0,
+    });
+    settings.until_density = Some(0.9);
+    settings.tolerance = 0.02;
+    let mut sim = Simulation::new(&scene, material, settings).unwrap();
+    let v0 = sim.curve()[0].particle_volume;
+    let rho0 = sim.curve()[0].rel_density;
+    // Mesh volume error of the coarse octant is below 2 %.
+    assert!((rho0 / cell.rho0() - 1.0).abs() < 0.02);
+    let k = material.bulk_modulus();
+    let mut worst_volume_excess: f64 = 0.0;
+    let mut last_rho = rho0;
+    let mut last_t = 0.0;
+    let status = sim
+        .run(|p| {
+            assert!(
+                p.rel_density >= last_rho - 1e-9,
+                "density fell at t = {}",
+                p.time
+            );
+            assert!(p.time > last_t);
+            last_rho = p.rel_density;
+            last_t = p.time;
+            true
+        })
+        .unwrap();
+    assert_eq!(status, Status::ReachedDensity);
+    // Elastic bound on the volume change: |dV/V| <= max |p| / K (p mean stress).
+    for p in sim.curve() {
+        let _ = p;
+    }
+    let fields = sim.fields();
+    let p_max = fields
+        .element
+        .mean_stress
+        .iter()
+        .fold(0.0_f64, |m, p| m.max(p.abs()));
+    let v = sim.curve().last().unwrap().particle_volume;
+    let dv = (v / v0 - 1.0).abs();
+    worst_volume_excess = worst_volume_excess.max(dv - 1.05 * p_max / k);
+    assert!(
+        worst_volume_excess <= 0.0,
+        "volume change {dv:e} exceeds the elastic bound {:e}",
+        p_max / k
+    );
+    assert!(sim.rel_density() >= 0.9);
+}
