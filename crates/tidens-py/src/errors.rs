@@ -1,0 +1,131 @@
+//! The Python exceptions of tidens and the mapping of the core errors onto them.
+//!
+//! Bad input (a parameter out of range, an unknown preset, a mesh that cannot
+//! be built) raises `ValueError` naming the Python argument and its allowed
+//! range. Everything that goes wrong while stepping raises
+//! `ConvergenceError`; the simulation then keeps its last converged state.
+
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyValueError};
+use pyo3::prelude::*;
+use tidens_material::MaterialError;
+use tidens_mesh::{MAX_LEVEL, MeshError};
+use tidens_solver::SolverError;
+
+create_exception!(
+    tidens_rs._core,
+    TidensError,
+    PyException,
+    "Base class of the errors raised by the solver."
+);
+create_exception!(
+    tidens_rs._core,
+    ConvergenceError,
+    TidensError,
+    "Newton failed at the smallest allowed time step, the step limit was\n\
+     reached, or a linear solve failed. The simulation keeps its last\n\
+     converged state, so its curve up to the failure is still available."
+);
+create_exception!(
+    tidens_rs._core,
+    UnsupportedError,
+    TidensError,
+    "A scene this version cannot simulate."
+);
+
+/// When an error happened: an element or material failure while setting up
+/// means bad input, while stepping it means the step could not be solved.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Phase {
+    Setup,
+    Run,
+}
+
+/// The Python argument that sets a core parameter, so that the message names
+/// what the user typed, and for the material constants also the symbol of the
+/// formulas (E, nu, C, n). Names without an entry are already the same.
+fn python_name(core_name: &str) -> (&str, Option<&str>) {
+    let python = match core_name {
+        "stress" => "stress_mpa",
+        "ramp_time" => "ramp_time_s",
+        "until_time" => "until_time_s",
+        "dt_initial" => "dt_initial_s",
+        "dt_max" => "dt_max_s",
+        "time_targets" => "time_targets_s",
+        "newton.max_iterations" => "newton_max_iterations",
+        "newton.residual_tolerance" => "newton_residual_tolerance",
+        "radius" => "radius_mm",
+        "E" => return ("young_mpa", Some(core_name)),
+        "nu" => return ("poisson", Some(core_name)),
+        "C" => return ("creep_c", Some(core_name)),
+        "n" => return ("creep_n", Some(core_name)),
+        other => other,
+    };
+    (python, None)
+}
+
+/// `ValueError("<argument> = <value>: must be <allowed>")`, the core's own
+/// message with the Python argument name, e.g. `poisson (nu) = 0.6: must be
+/// in [-0.99, 0.4999]`.
+pub(crate) fn parameter_error(
+    core_name: &str,
+    value: impl std::fmt::Display,
+    allowed: &str,
+) -> PyErr {
+    let message = match python_name(core_name) {
+        (name, Some(symbol)) => format!("{name} ({symbol}) = {value}: must be {allowed}"),
+        (name, None) => format!("{name} = {value}: must be {allowed}"),
+    };
+    PyValueError::new_err(message)
+}
+
+/// `ValueError` for an out-of-range mesh level.
+pub(crate) fn mesh_level_error(level: impl std::fmt::Display) -> PyErr {
+    parameter_error("mesh_level", level, &format!("in 1..={MAX_LEVEL}"))
+}
+
+/// Maps a material error: bad parameters and unknown presets are bad input;
+/// an inverted material point while stepping is a failed step.
+pub(crate) fn material_error(err: MaterialError, phase: Phase) -> PyErr {
+    match err {
+        MaterialError::Parameter {
+            name,
+            value,
+            allowed,
+        } => parameter_error(name, value, allowed),
+        MaterialError::UnknownPreset(..) => PyValueError::new_err(err.to_string()),
+        MaterialError::Inverted { .. } => match phase {
+            Phase::Setup => PyValueError::new_err(err.to_string()),
+            Phase::Run => ConvergenceError::new_err(err.to_string()),
+        },
+    }
+}
+
+/// Maps a solver error onto the Python exception for it.
+pub(crate) fn solver_error(err: SolverError, phase: Phase) -> PyErr {
+    match err {
+        SolverError::Parameter {
+            name,
+            value,
+            ref allowed,
+        } => parameter_error(name, value, allowed),
+        SolverError::Material(e) => material_error(e, phase),
+        SolverError::Mesh(MeshError::Level(level)) => mesh_level_error(level),
+        SolverError::Mesh(e) => PyValueError::new_err(e.to_string()),
+        SolverError::Unsupported(_) => UnsupportedError::new_err(err.to_string()),
+        SolverError::Fem(_) => match phase {
+            Phase::Setup => PyValueError::new_err(err.to_string()),
+            Phase::Run => ConvergenceError::new_err(err.to_string()),
+        },
+        SolverError::Linear(_)
+        | SolverError::NoConvergence { .. }
+        | SolverError::StepLimit { .. } => ConvergenceError::new_err(err.to_string()),
+    }
+}
+
+/// The simulation's state was left half-updated by a panic in an earlier call.
+pub(crate) fn poisoned() -> PyErr {
+    TidensError::new_err(
+        "this simulation is unusable: an earlier call panicked in the middle of a step",
+    )
+}

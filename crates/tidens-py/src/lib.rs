@@ -1,0 +1,53 @@
+//! Python bindings of tidens: the native module `tidens_rs._core`.
+//!
+//! A thin layer over `tidens-solver`: validation stays in the core (its errors
+//! become `ValueError` naming the Python argument, see [`errors`]), results
+//! come back as dicts of plain numbers and numpy arrays ([`convert`]), and
+//! every solver step runs with the GIL released ([`simulation`]). The
+//! contract is the hand-written stub `python/tidens_rs/_core.pyi`, checked
+//! with `python -m mypy.stubtest tidens_rs._core`.
+
+mod cell;
+mod convert;
+mod errors;
+mod material;
+mod simulation;
+
+pub use cell::PyCell;
+pub use errors::{ConvergenceError, TidensError, UnsupportedError};
+pub use material::{PyMaterial, tmp_creep_coefficient};
+pub use simulation::PySimulation;
+
+/// Native core of tidens (Rust, PyO3). Units: mm, N, MPa, s.
+///
+/// Private module: use the public API of tidens_rs.
+#[pyo3::pymodule]
+mod _core {
+    use pyo3::prelude::*;
+    use tidens_material::Preset;
+
+    #[pymodule_export]
+    use super::{
+        ConvergenceError, PyCell, PyMaterial, PySimulation, TidensError, UnsupportedError,
+        tmp_creep_coefficient,
+    };
+
+    #[pymodule_init]
+    fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
+        m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+        // The material preset names, in the order of DESIGN.md's table.
+        m.add("PRESET_NAMES", Preset::ALL.map(Preset::name).to_vec())?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// The GIL is released around the steps, which needs the core
+    /// simulation to move between threads.
+    #[test]
+    fn the_core_simulation_is_send() {
+        fn assert_send<T: Send>() {}
+        assert_send::<tidens_solver::Simulation>();
+    }
+}

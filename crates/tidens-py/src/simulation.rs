@@ -1,0 +1,326 @@
+//! `Simulation`: one hot-pressing run, stepped with the GIL released.
+//!
+//! The core simulation sits behind a mutex so that the object can be shared
+//! between Python threads: one thread steps it (the GIL released for the whole
+//! step) while others keep running Python. A copy of the progress (status,
+//! curve, totals) is refreshed after every step, so that the status, the
+//! curve and the totals can be read from another thread without waiting for
+//! the step in progress. Every wait for a lock happens with the GIL released
+//! and no lock is held while waiting for the GIL, so the two cannot deadlock.
+
+use crate::cell::PyCell;
+use crate::convert::{
+    columns_dict, curve_columns, fields_dict, point_dict, stats_dict, status_name,
+};
+use crate::errors::{Phase, mesh_level_error, parameter_error, poisoned, solver_error};
+use crate::material::PyMaterial;
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict};
+use std::sync::{Mutex, MutexGuard, PoisonError};
+use tidens_solver::{
+    CurvePoint, LoadHistory, MeshOptions, NewtonSettings, RunStats, Scene, Settings, Simulation,
+    Status,
+};
+
+/// What readers on other threads see: refreshed after every step.
+struct Progress {
+    status: Status,
+    curve: Vec<CurvePoint>,
+    stats: RunStats,
+    degrees_of_freedom: usize,
+}
+
+impl Progress {
+    fn of(sim: &Simulation) -> Self {
+        Self {
+            status: sim.status(),
+            curve: sim.curve().to_vec(),
+            stats: sim.stats(),
+            degrees_of_freedom: sim.degrees_of_freedom(),
+        }
+    }
+
+    /// Catches up with `sim`: appends its new curve points.
+    fn refresh(&mut self, sim: &Simulation) {
+        let curve = sim.curve();
+        if let Some(new) = curve.get(self.curve.len()..) {
+            self.curve.extend_from_slice(new);
+        }
+        self.status = sim.status();
+        self.stats = sim.stats();
+        self.degrees_of_freedom = sim.degrees_of_freedom();
+    }
+}
+
+/// One hot-pressing run of a cell; advance it step by step or run it.
+///
+/// Simulation(cell, material, *, stress_mpa, ...) meshes the cell and sets up
+/// the run. Load: applied stress stress_mpa [MPa] in (0, 1e4], ramped
+/// linearly from 0 over ramp_time_s [s] then held; the cell feels
+/// knockdown * stress (die-wall friction, knockdown in (0, 1]). Stop: at
+/// relative density until_density and/or time until_time_s [s] (at least one).
+/// Mesh: mesh_level (1 coarsest; each level refines by ~sqrt(2)) and grading
+/// (element-size ratio toward the contacts, in [1, 10]). Steps: tolerance is
+/// the target relative time error in [1e-6, 0.5]; max_strain_increment the
+/// largest plastic strain increment per step in (0, 2]; dt_initial_s, dt_max_s
+/// [s]; max_steps; time_targets_s [s], times a step must end on; Newton:
+/// newton_max_iterations per attempt, newton_residual_tolerance relative to
+/// the piston force. A value out of range raises ValueError naming it.
+///
+/// Thread-safe: the step runs with the GIL released, and status, curve() and
+/// stats() can be read from another thread while it runs.
+#[pyclass(name = "Simulation", module = "tidens_rs._core", frozen)]
+pub struct PySimulation {
+    sim: Mutex<Simulation>,
+    progress: Mutex<Progress>,
+    lengths: [f64; 3],
+    node_count: usize,
+    element_count: usize,
+}
+
+impl PySimulation {
+    /// The progress copy. It is only ever locked to copy plain data (no code
+    /// that can panic half-way), so a poisoned lock still holds whole data.
+    fn progress(&self) -> MutexGuard<'_, Progress> {
+        self.progress.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// One step of the core simulation; to be called with the GIL released.
+    fn step(&self) -> PyResult<CurvePoint> {
+        let mut sim = self.sim.lock().map_err(|_| poisoned())?;
+        let point = sim.advance().cloned();
+        // Failed steps change the totals too (failed attempts).
+        self.progress().refresh(&sim);
+        point.map_err(|e| solver_error(e, Phase::Run))
+    }
+}
+
+/// A non-negative integer argument that the core takes as an unsigned count.
+fn count(name: &str, value: i64, allowed: &str) -> PyResult<usize> {
+    usize::try_from(value).map_err(|_| parameter_error(name, value, allowed))
+}
+
+#[pymethods]
+impl PySimulation {
+    #[new]
+    #[pyo3(signature = (
+        cell,
+        material,
+        *,
+        stress_mpa,
+        knockdown = 1.0,
+        ramp_time_s = 1.0,
+        until_density = None,
+        until_time_s = None,
+        mesh_level = 3,
+        grading = 1.0,
+        tolerance = 0.005,
+        max_strain_increment = 0.2,
+        dt_initial_s = None,
+        dt_max_s = f64::INFINITY,
+        max_steps = 100_000,
+        time_targets_s = Vec::new(),
+        newton_max_iterations = 25,
+        newton_residual_tolerance = 1e-6,
+    ))]
+    // The Python keyword arguments: one per solver knob.
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        cell: &Bound<'_, PyCell>,
+        material: &Bound<'_, PyMaterial>,
+        stress_mpa: f64,
+        knockdown: f64,
+        ramp_time_s: f64,
+        until_density: Option<f64>,
+        until_time_s: Option<f64>,
+        mesh_level: i64,
+        grading: f64,
+        tolerance: f64,
+        max_strain_increment: f64,
+        dt_initial_s: Option<f64>,
+        dt_max_s: f64,
+        max_steps: i64,
+        time_targets_s: Vec<f64>,
+        newton_max_iterations: i64,
+        newton_residual_tolerance: f64,
+    ) -> PyResult<Self> {
+        if until_density.is_none() && until_time_s.is_none() {
+            return Err(pyo3::exceptions::PyValueError::new_err(
+                "until_density and until_time_s are both None: give at least one stop \
+                 condition (until_density in (rho0, 1), until_time_s > 0 s)",
+            ));
+        }
+        let level = u32::try_from(mesh_level).map_err(|_| mesh_level_error(mesh_level))?;
+        let settings = Settings {
+            until_density,
+            until_time: until_time_s,
+            tolerance,
+            max_strain_increment,
+            dt_initial: dt_initial_s,
+            dt_max: dt_max_s,
+            max_steps: count("max_steps", max_steps, ">= 1")?,
+            time_targets: time_targets_s,
+            newton: NewtonSettings {
+                max_iterations: count(
+                    "newton_max_iterations",
+                    newton_max_iterations,
+                    "in [1, 1000]",
+                )?,
+                residual_tolerance: newton_residual_tolerance,
+                ..NewtonSettings::default()
+            },
+            ..Settings::new(LoadHistory {
+                stress: stress_mpa,
+                knockdown,
+                ramp_time: ramp_time_s,
+            })
+        };
+        // Cheap checks first, so bad input fails before the mesh is built.
+        settings
+            .validate()
+            .map_err(|e| solver_error(e, Phase::Setup))?;
+        let cell = cell.get().inner.clone();
+        let material = material.get().inner;
+        let options = MeshOptions { level, grading };
+        let sim = py
+            .detach(move || {
+                let scene = Scene::from_cell(&cell, &options)?;
+                Simulation::new(&scene, material, settings)
+            })
+            .map_err(|e| solver_error(e, Phase::Setup))?;
+        let body = sim.body();
+        let (node_count, element_count) = (body.nodes().len(), body.elements().len());
+        Ok(Self {
+            progress: Mutex::new(Progress::of(&sim)),
+            lengths: sim.lengths(),
+            node_count,
+            element_count,
+            sim: Mutex::new(sim),
+        })
+    }
+
+    /// One converged step (GIL released); returns its curve point.
+    ///
+    /// The point is a dict: time_s, rel_density, piston_displacement_mm
+    /// (negative in compression), applied_stress_mpa, cell_stress_mpa, step,
+    /// newton_iterations, newton_total, dt_s, max_strain_increment,
+    /// particle_volume_mm3, time_error_s, contacts, max_penetration_mm.
+    /// Once stopped, returns the last point again. Raises ConvergenceError if
+    /// the step fails; the state stays at the last converged step.
+    fn advance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let point = py.detach(|| self.step())?;
+        point_dict(py, &point)
+    }
+
+    /// Steps to the stop condition; `callback(point)` after each step, returning False stops.
+    ///
+    /// Each step runs with the GIL released; Ctrl-C raises KeyboardInterrupt
+    /// between steps, leaving the state at the last converged step. Returns
+    /// the status: "running" (stopped by the callback), "reached_density" or
+    /// "reached_time". Raises ConvergenceError if a step fails.
+    #[pyo3(signature = (callback = None))]
+    fn run(&self, py: Python<'_>, callback: Option<Bound<'_, PyAny>>) -> PyResult<&'static str> {
+        while self.progress().status == Status::Running {
+            let point = py.detach(|| self.step())?;
+            py.check_signals()?;
+            if let Some(callback) = &callback {
+                let answer = callback.call1((point_dict(py, &point)?,))?;
+                // Exactly False stops: None (no return statement) goes on.
+                if answer.cast::<PyBool>().is_ok_and(|b| !b.is_true()) {
+                    break;
+                }
+            }
+        }
+        Ok(status_name(self.progress().status))
+    }
+
+    /// "running", "reached_density" or "reached_time".
+    #[getter]
+    fn status(&self) -> &'static str {
+        status_name(self.progress().status)
+    }
+
+    /// Time of the last converged step [s].
+    #[getter]
+    fn time_s(&self) -> f64 {
+        self.progress().curve.last().map_or(0.0, |p| p.time)
+    }
+
+    /// Relative density of the last converged step [-].
+    #[getter]
+    fn rel_density(&self) -> f64 {
+        self.progress().curve.last().map_or(0.0, |p| p.rel_density)
+    }
+
+    /// Unknowns at the current contact state: free displacement components plus the piston.
+    #[getter]
+    fn degrees_of_freedom(&self) -> usize {
+        self.progress().degrees_of_freedom
+    }
+
+    /// Number of mesh nodes.
+    #[getter]
+    fn node_count(&self) -> usize {
+        self.node_count
+    }
+
+    /// Number of hexahedral elements.
+    #[getter]
+    fn element_count(&self) -> usize {
+        self.element_count
+    }
+
+    /// Cell box edge lengths (Lx, Ly, Lz) before pressing [mm].
+    #[getter]
+    fn lengths_mm(&self) -> (f64, f64, f64) {
+        let [x, y, z] = self.lengths;
+        (x, y, z)
+    }
+
+    /// The densification curve: a dict of 1-D float64 arrays with the keys of
+    /// the point dict, one entry per converged step, the initial state first.
+    fn curve<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let columns = curve_columns(&self.progress().curve);
+        columns_dict(py, columns)
+    }
+
+    /// Fields of the last converged state, numpy arrays: points (N,3) current
+    /// coordinates [mm], displacement (N,3) [mm], contact_force (N,3) force of
+    /// the rigid planes on each node [N], cells (E,8) int64 node indices (VTK
+    /// hexahedron order), and per element von_mises [MPa], mean_stress (tension
+    /// positive) [MPa] and eqps (equivalent plastic strain) [-].
+    ///
+    /// Waits (GIL released) for a step in progress on another thread to end.
+    fn fields<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let fields = py.detach(|| {
+            self.sim
+                .lock()
+                .map(|sim| sim.fields())
+                .map_err(|_| poisoned())
+        })?;
+        fields_dict(py, fields)
+    }
+
+    /// Run totals: steps, newton_iterations, rejected_steps, failed_attempts,
+    /// llt_factorizations, lblt_factorizations (counts), and the wall times
+    /// evaluation_seconds, assembly_seconds, linear_seconds [s].
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let stats = self.progress().stats;
+        stats_dict(py, &stats)
+    }
+
+    fn __repr__(&self) -> String {
+        let progress = self.progress();
+        let (step, time, rho) = progress
+            .curve
+            .last()
+            .map_or((0, 0.0, 0.0), |p| (p.step, p.time, p.rel_density));
+        format!(
+            "Simulation(status='{}', step={step}, time_s={time:.6e}, rel_density={rho:.5}, nodes={}, elements={})",
+            status_name(progress.status),
+            self.node_count,
+            self.element_count
+        )
+    }
+}

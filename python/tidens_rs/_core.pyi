@@ -1,0 +1,125 @@
+"""Native core of tidens (Rust, PyO3). Units: mm, N, MPa, s.
+
+Private module: use the public API of :mod:`tidens_rs`.
+"""
+
+from collections.abc import Callable
+from typing import Any, final
+
+import numpy as np
+import numpy.typing as npt
+
+__all__ = [
+    "ConvergenceError",
+    "Cell",
+    "Material",
+    "Simulation",
+    "TidensError",
+    "UnsupportedError",
+    "tmp_creep_coefficient",
+    "__version__",
+    "PRESET_NAMES",
+]
+
+__version__: str
+PRESET_NAMES: list[str]
+
+class TidensError(Exception):
+    """Base class of the errors raised by the solver."""
+
+class ConvergenceError(TidensError):
+    """Newton failed at the smallest allowed time step, the step limit was
+    reached, or a linear solve failed. The simulation keeps its last
+    converged state, so its curve up to the failure is still available."""
+
+class UnsupportedError(TidensError):
+    """A scene this version cannot simulate."""
+
+def tmp_creep_coefficient(dv_over_v: float, cycle_s: float, sigma0_mpa: float, n: float) -> float:
+    """Norton coefficient C [MPa^-1 s^-1] of transformation mismatch plasticity."""
+
+@final
+class Material:
+    """Hencky elasticity + J2 Norton viscoplasticity, eps_dot = C q^n."""
+
+    def __new__(cls, young_mpa: float, poisson: float, creep_c: float, creep_n: float) -> Material: ...
+    @staticmethod
+    def preset(name: str) -> Material: ...
+    @property
+    def young_mpa(self) -> float: ...
+    @property
+    def poisson(self) -> float: ...
+    @property
+    def creep_c(self) -> float: ...
+    @property
+    def creep_n(self) -> float: ...
+    @property
+    def shear_modulus_mpa(self) -> float: ...
+    @property
+    def bulk_modulus_mpa(self) -> float: ...
+    @property
+    def constrained_modulus_mpa(self) -> float: ...
+    def with_elastic(self, young_mpa: float, poisson: float) -> Material: ...
+    def creep_rate(self, q_mpa: float) -> float: ...
+
+@final
+class Cell:
+    """A box [0,Lx]x[0,Ly]x[0,Lz] of mirror planes with particle octants at its corners."""
+
+    @staticmethod
+    def sc(radius_mm: float = 0.05, aspect_ratio: float = 1.0) -> Cell: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def lengths_mm(self) -> tuple[float, float, float]: ...
+    @property
+    def rho0(self) -> float: ...
+    @property
+    def octants(self) -> list[tuple[tuple[bool, bool, bool], float, float]]: ...
+
+@final
+class Simulation:
+    """One hot-pressing run of a cell; advance it step by step or run it."""
+
+    def __new__(
+        cls,
+        cell: Cell,
+        material: Material,
+        *,
+        stress_mpa: float,
+        knockdown: float = 1.0,
+        ramp_time_s: float = 1.0,
+        until_density: float | None = None,
+        until_time_s: float | None = None,
+        mesh_level: int = 3,
+        grading: float = 1.0,
+        tolerance: float = 0.005,
+        max_strain_increment: float = 0.2,
+        dt_initial_s: float | None = None,
+        dt_max_s: float = ...,
+        max_steps: int = 100000,
+        time_targets_s: list[float] = ...,
+        newton_max_iterations: int = 25,
+        newton_residual_tolerance: float = 1e-6,
+    ) -> Simulation: ...
+    def advance(self) -> dict[str, float]:
+        """One converged step (GIL released); returns its curve point."""
+    def run(self, callback: Callable[[dict[str, float]], bool | None] | None = None) -> str:
+        """Steps to the stop condition; `callback(point)` after each step, returning False stops."""
+    @property
+    def status(self) -> str: ...
+    @property
+    def time_s(self) -> float: ...
+    @property
+    def rel_density(self) -> float: ...
+    @property
+    def degrees_of_freedom(self) -> int: ...
+    @property
+    def node_count(self) -> int: ...
+    @property
+    def element_count(self) -> int: ...
+    @property
+    def lengths_mm(self) -> tuple[float, float, float]: ...
+    def curve(self) -> dict[str, npt.NDArray[np.float64]]: ...
+    def fields(self) -> dict[str, npt.NDArray[Any]]: ...
+    def stats(self) -> dict[str, float]: ...

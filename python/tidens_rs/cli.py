@@ -1,0 +1,171 @@
+"""The ``tidens`` command.
+
+``tidens run`` presses one cell and writes DIR/curve.csv (streamed),
+DIR/summary.json, DIR/fields_*.vtu with DIR/fields.pvd, and DIR/density.png;
+``tidens demo`` runs the README's case (sc, Ti-6Al-4V at 1293 K, 10 MPa, to
+rho = 0.9).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from . import cells, materials
+from ._core import ConvergenceError, Material, TidensError, __version__
+from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings
+from .result import MARK_DENSITIES, Result
+
+
+def _float_list(text: str) -> list[float]:
+    try:
+        return [float(x) for x in text.split(",") if x.strip()]
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected comma-separated numbers") from e
+
+
+def _add_run_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("cell")
+    g.add_argument("--cell", default="sc", choices=cells.CELL_NAMES, help="packing (default sc)")
+    g.add_argument("--aspect-ratio", type=float, default=1.0, help="spheroid c/a, c along the load (default 1)")
+    g.add_argument("--radius", type=float, default=cells.DEFAULT_RADIUS_MM, help="particle radius a [mm] (default 0.05; the curve does not depend on it)")
+    g = p.add_argument_group("material")
+    g.add_argument("--material", choices=materials.PRESET_NAMES, help="preset (default ti64-creep-1293k)")
+    g.add_argument("--C", dest="creep_c", type=float, help="Norton coefficient C [MPa^-n s^-1] (with --n, instead of --material)")
+    g.add_argument("--n", dest="creep_n", type=float, help="Norton exponent n (with --C)")
+    g.add_argument("--E", dest="young", type=float, help=f"Young's modulus [MPa] (default {materials.DEFAULT_YOUNG_MPA:g})")
+    g.add_argument("--nu", dest="poisson", type=float, help=f"Poisson's ratio (default {materials.DEFAULT_POISSON:g})")
+    g = p.add_argument_group("load")
+    g.add_argument("--stress", type=float, required=True, help="applied piston stress sigma [MPa]")
+    g.add_argument("--knockdown", type=float, default=1.0, help="die-wall knock-down factor f, the cell feels f*sigma (default 1)")
+    g.add_argument("--ramp-time", type=float, default=1.0, help="linear ramp of the stress [s] (default 1)")
+    g = p.add_argument_group("stop")
+    g.add_argument("--until-density", type=float, help="stop at this relative density")
+    g.add_argument("--until-time", type=float, help="stop at this time [s]")
+    g = p.add_argument_group("numerics")
+    g.add_argument("--mesh-level", type=int, default=DEFAULT_MESH_LEVEL, help=f"mesh level >= 1, each level refines the elements by about sqrt(2) (default {DEFAULT_MESH_LEVEL})")
+    g.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE, help=f"time-integration accuracy, relative error of t(rho) (default {DEFAULT_TOLERANCE:g})")
+    g.add_argument("--grading", type=float, default=1.0, help="element-size ratio toward the contact points (default 1)")
+    g.add_argument("--max-steps", type=int, default=100_000, help="step limit (default 100000)")
+    g = p.add_argument_group("output")
+    g.add_argument("--out", type=Path, required=True, help="output directory")
+    g.add_argument("--vtu-densities", type=_float_list, help="comma-separated densities for VTU snapshots (default 0.6,0.7,0.8,0.9)")
+    g.add_argument("--vtu-times", type=_float_list, default=[], help="comma-separated times [s] for VTU snapshots")
+    g.add_argument("--no-plot", action="store_true", help="do not write density.png")
+    g.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _material(args: argparse.Namespace) -> Material:
+    if (args.creep_c is None) != (args.creep_n is None):
+        raise ValueError("--C and --n go together: give both, or neither and --material")
+    if args.creep_c is not None:
+        if args.material is not None:
+            raise ValueError("--material and --C/--n exclude each other")
+        m = materials.custom(args.creep_c, args.creep_n)
+    else:
+        m = materials.by_name(args.material or "ti64-creep-1293k")
+    if args.young is not None or args.poisson is not None:
+        m = m.with_elastic(
+            args.young if args.young is not None else m.young_mpa,
+            args.poisson if args.poisson is not None else m.poisson,
+        )
+    return m
+
+
+def _report(result: Result) -> None:
+    s = result.summary()
+    print(f"status: {s['status']}   final density {s['final_density']:.4f} at t = {s['final_time_s']:.4g} s")
+    print(f"{'rho':>5} {'t FE [s]':>12} {'err est [s]':>12} {'t continuum [s]':>16}")
+    for r in MARK_DENSITIES:
+        k = f"{r:g}"
+        fe = s["times_to_density_s"].get(k)
+        err = s["time_error_estimate_s"].get(k)
+        cm = s["continuum_times_to_density_s"].get(k)
+        fmt = lambda v: "-" if v is None else f"{v:.4g}"  # noqa: E731
+        print(f"{r:5.2f} {fmt(fe):>12} {fmt(err):>12} {fmt(cm):>16}")
+    print(
+        f"wall {s['wall_seconds']:.1f} s, {s['steps']} steps, {s['newton_iterations']} Newton iterations, "
+        f"{s['degrees_of_freedom']} dofs (mesh level {s['mesh_level']}, tolerance {s['tolerance']:g})"
+    )
+
+
+def _run(args: argparse.Namespace) -> int:
+    if args.until_density is None and args.until_time is None:
+        raise ValueError("give --until-density, --until-time or both")
+    case = Case(
+        cell=cells.by_name(args.cell, args.radius, args.aspect_ratio),
+        material=_material(args),
+        stress_mpa=args.stress,
+        knockdown=args.knockdown,
+        ramp_time_s=args.ramp_time,
+        solver=SolverSettings(
+            mesh_level=args.mesh_level,
+            tolerance=args.tolerance,
+            grading=args.grading,
+            max_steps=args.max_steps,
+        ),
+    )
+    densities = args.vtu_densities if args.vtu_densities is not None else list(MARK_DENSITIES)
+    if args.until_density is not None:
+        densities = [r for r in densities if r <= args.until_density]
+    out: Path = args.out
+    try:
+        result = case.run(
+            args.until_density,
+            args.until_time,
+            out_dir=out,
+            snapshot_densities=densities,
+            snapshot_times_s=args.vtu_times,
+            progress=not args.quiet,
+        )
+    except ConvergenceError as e:
+        print(f"tidens: solver failure: {e}\n(partial results in {out})", file=sys.stderr)
+        partial = getattr(e, "result", None)
+        if partial is not None and not args.no_plot:
+            partial.plot(out / "density.png")
+        return 2
+    if not args.no_plot:
+        result.plot(out / "density.png")
+    _report(result)
+    print(f"wrote {out / 'curve.csv'}, {out / 'summary.json'}, {len(result.snapshots)} VTU file(s)" + ("" if args.no_plot else f", {out / 'density.png'}"))
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="tidens", description="Powder-level FE of hot pressing of titanium powders (units: mm, N, MPa, s).")
+    parser.add_argument("--version", action="version", version=f"tidens {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+    run = sub.add_parser("run", help="press one cell and write curve, summary, fields and a plot")
+    _add_run_options(run)
+    demo = sub.add_parser("demo", help="the README case: sc Ti-6Al-4V at 10 MPa to rho = 0.9, with a plot")
+    demo.add_argument("--out", type=Path, default=Path("tidens-demo"), help="output directory (default ./tidens-demo)")
+    demo.add_argument("--quiet", action="store_true", help="no progress bar")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.command == "demo":
+        argv2 = [
+            "run", "--cell", "sc", "--material", "ti64-creep-1293k", "--stress", "10",
+            "--until-density", "0.9", "--out", str(args.out),
+        ] + (["--quiet"] if args.quiet else [])
+        args = parser.parse_args(argv2)
+    try:
+        return _run(args)
+    except (ValueError, TypeError) as e:
+        parser.error(str(e))
+    except TidensError as e:
+        print(f"tidens: {e}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"tidens: interrupted; partial results in {args.out}", file=sys.stderr)
+        return 130
+    return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

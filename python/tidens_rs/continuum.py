@@ -1,0 +1,134 @@
+"""The closed-form continuum model of die pressing (DESIGN.md section 8).
+
+Densification rates of the seed's Eqs. 2 and 3 (Norton creep ``C q^n``, stress
+acting on the powder ``s = f sigma`` [MPa], rates in 1/s):
+
+* initial stage (rho < 0.9)::
+
+    rho_dot = 3.06 C ((1-rho0)/(rho-rho0))^(n-1/2) rho0^(1/3) / rho^(2n-2/3) (Bi s/3)^n
+
+* final stage (rho >= 0.9)::
+
+    rho_dot = 1.5 C rho (1-rho) / (1-(1-rho)^(1/n))^n (3 Bf s/(2n))^n
+
+with Bi = 1.1, Bf = 1.8 for die pressing. Both rates are ``s^n`` times a
+function of rho, so under a ramp ``s(t)`` the density depends on time only
+through the effective time ``t_eff = integral (s(t)/s)^n dt``;
+``t(rho)`` is the integral of ``1/rho_dot`` from rho0 (the integrand vanishes
+at rho0), mapped back from ``t_eff`` to ``t``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+
+B_INITIAL = 1.1
+B_FINAL = 1.8
+STAGE_SWITCH = 0.9
+
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class ContinuumModel:
+    """Continuum densification model for one material and load.
+
+    Parameters: ``creep_c`` [MPa^-n s^-1], ``creep_n``, ``stress_mpa`` (applied
+    nominal stress), ``knockdown`` (die-wall factor f), ``rho0`` (initial
+    relative density), ``ramp_time_s`` (linear ramp of the stress).
+    """
+
+    creep_c: float
+    creep_n: float
+    stress_mpa: float
+    rho0: float
+    knockdown: float = 1.0
+    ramp_time_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        checks = [
+            ("creep_c", self.creep_c, self.creep_c > 0, "> 0 MPa^-n s^-1"),
+            ("creep_n", self.creep_n, self.creep_n >= 1, ">= 1"),
+            ("stress_mpa", self.stress_mpa, self.stress_mpa > 0, "> 0 MPa"),
+            ("rho0", self.rho0, 0 < self.rho0 < STAGE_SWITCH, "in (0, 0.9)"),
+            ("knockdown", self.knockdown, 0 < self.knockdown <= 1, "in (0, 1]"),
+            ("ramp_time_s", self.ramp_time_s, self.ramp_time_s >= 0, ">= 0 s"),
+        ]
+        for name, value, ok, allowed in checks:
+            if not (ok and np.isfinite(value)):
+                raise ValueError(f"{name} = {value}: must be {allowed}")
+
+    @property
+    def cell_stress_mpa(self) -> float:
+        """Stress acting on the powder, f sigma [MPa]."""
+        return self.knockdown * self.stress_mpa
+
+    def rate(self, rho: npt.ArrayLike) -> FloatArray:
+        """Densification rate at full load [1/s], seed Eqs. 2 (rho < 0.9) and 3."""
+        r = np.asarray(rho, dtype=float)
+        c, n, s, r0 = self.creep_c, self.creep_n, self.cell_stress_mpa, self.rho0
+        out = np.empty_like(r)
+        ini = r < STAGE_SWITCH
+        x = np.maximum(r[ini] - r0, 0.0)
+        with np.errstate(divide="ignore"):
+            out[ini] = (
+                3.06 * c * ((1.0 - r0) / x) ** (n - 0.5) * r0 ** (1.0 / 3.0)
+                / r[ini] ** (2.0 * n - 2.0 / 3.0) * (B_INITIAL * s / 3.0) ** n
+            )
+        rf = r[~ini]
+        out[~ini] = (
+            1.5 * c * rf * (1.0 - rf) / (1.0 - (1.0 - rf) ** (1.0 / n)) ** n
+            * (3.0 * B_FINAL * s / (2.0 * n)) ** n
+        )
+        return out
+
+    def effective_time(self, rho: npt.ArrayLike, points: int = 400) -> FloatArray:
+        """Effective time at full load to reach each density [s]: the integral
+        of 1/rho_dot from rho0 (Gauss-Legendre on each stage, with
+        ``rho = rho0 + (rho_1 - rho0) u^2`` to smooth the start)."""
+        targets = np.atleast_1d(np.asarray(rho, dtype=float))
+        if np.any(targets < self.rho0) or np.any(targets >= 1.0):
+            raise ValueError(f"rho must be in [rho0 = {self.rho0:.5f}, 1)")
+        u, w = np.polynomial.legendre.leggauss(points)
+        u = 0.5 * (u + 1.0)
+        w = 0.5 * w
+        out = np.empty_like(targets)
+        for k, target in enumerate(targets):
+            first = min(target, STAGE_SWITCH)
+            span = first - self.rho0
+            rr = self.rho0 + span * u**2
+            t = float(np.sum(w * 2.0 * span * u / self.rate(rr)))
+            if target > STAGE_SWITCH:
+                # Final stage: 1/rate ~ 1/(1 - rho) near full density; map
+                # rho = 1 - (1 - 0.9) ((1 - target)/(1 - 0.9))^u.
+                a, b = 1.0 - STAGE_SWITCH, 1.0 - target
+                rr = 1.0 - a * (b / a) ** u
+                drdu = -(1.0 - rr) * np.log(b / a)
+                t += float(np.sum(w * drdu / self.rate(rr)))
+            out[k] = t
+        return out
+
+    def time_from_effective(self, t_eff: npt.ArrayLike) -> FloatArray:
+        """Real time [s] for an effective time [s], inverting the ramp."""
+        te = np.asarray(t_eff, dtype=float)
+        n, tr = self.creep_n, self.ramp_time_s
+        if tr <= 0:
+            return te.copy()
+        in_ramp = te < tr / (n + 1.0)
+        return np.where(
+            in_ramp,
+            ((n + 1.0) * tr**n * np.maximum(te, 0.0)) ** (1.0 / (n + 1.0)),
+            te + n * tr / (n + 1.0),
+        )
+
+    def time_to_density(self, rho: npt.ArrayLike) -> FloatArray:
+        """Time [s] to reach each density under the ramp and hold."""
+        return self.time_from_effective(self.effective_time(rho))
+
+    def curve(self, rho_end: float, points: int = 200) -> tuple[FloatArray, FloatArray]:
+        """(time [s], density) from rho0 to ``rho_end``."""
+        rho = self.rho0 + (rho_end - self.rho0) * np.linspace(0.0, 1.0, points) ** 2
+        return self.time_to_density(rho), rho

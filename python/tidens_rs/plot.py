@@ -1,0 +1,44 @@
+"""Figures (matplotlib)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from .result import Result
+
+
+def plot_density(result: Result) -> Figure:
+    """Relative density versus time, FE beside the continuum model, on a
+    linear and a logarithmic time axis."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot as plt
+
+    c = result.case
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+    t, rho = result.time_s, result.rel_density
+    rho_end = float(max(rho[-1], c.cell.rho0 + 1e-3))
+    tc, rc = result.continuum().curve(min(rho_end, 0.999))
+    label = f"FE, {c.cell.name}, level {c.solver.mesh_level}"
+    for ax, log in zip(axes, (False, True)):
+        keep = t > 0 if log else np.ones_like(t, dtype=bool)
+        ax.plot(t[keep], rho[keep], "-", color="C0", label=label)
+        keep_c = tc > 0 if log else np.ones_like(tc, dtype=bool)
+        ax.plot(tc[keep_c], rc[keep_c], "--", color="C3", label="continuum model (seed Eqs. 2, 3)")
+        ax.set_xlabel("time [s]")
+        ax.set_ylabel("relative density")
+        ax.grid(True, alpha=0.3)
+        if log:
+            ax.set_xscale("log")
+    m = c.material
+    axes[0].set_title(
+        f"{c.stress_mpa:g} MPa (f = {c.knockdown:g}), C = {m.creep_c:.3g}, n = {m.creep_n:g}"
+    )
+    axes[0].legend(loc="lower right")
+    return fig

@@ -1,0 +1,186 @@
+"""What a run gives back: the densification curve as numpy arrays, the field
+snapshots, run statistics, and the continuum model for comparison."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from . import io
+from ._core import __version__
+from .continuum import ContinuumModel
+from .materials import name_of
+from .snapshot import Snapshot
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+    from .case import Case
+
+MARK_DENSITIES = (0.6, 0.7, 0.8, 0.9)
+
+
+def interpolate_time(time_s: np.ndarray, rho: np.ndarray, target: float) -> float | None:
+    """Time [s] at which the (non-decreasing) density first reaches
+    ``target``, linearly interpolated between steps; None if never reached."""
+    above = np.nonzero(rho >= target)[0]
+    if len(above) == 0:
+        return None
+    k = int(above[0])
+    if k == 0:
+        return float(time_s[0])
+    r0, r1 = rho[k - 1], rho[k]
+    w = (target - r0) / (r1 - r0) if r1 > r0 else 1.0
+    return float(time_s[k - 1] + w * (time_s[k] - time_s[k - 1]))
+
+
+@dataclass
+class Result:
+    """The outcome of :meth:`tidens_rs.Case.run`.
+
+    ``curve`` holds one numpy array per column of ``curve.csv`` (see
+    :data:`tidens_rs.io.CURVE_COLUMNS`); the most used ones are also
+    attributes: ``time_s``, ``rel_density``, ``piston_displacement_mm``,
+    ``applied_stress_mpa``. ``status`` is ``reached_density``,
+    ``reached_time``, ``stopped`` (by a callback), ``interrupted`` or
+    ``failed`` (then ``message`` says why).
+    """
+
+    case: Case
+    curve: dict[str, np.ndarray]
+    status: str
+    wall_seconds: float
+    stats: dict[str, float]
+    degrees_of_freedom: int
+    nodes: int
+    elements: int
+    snapshots: list[Snapshot] = field(default_factory=list)
+    message: str | None = None
+
+    @property
+    def time_s(self) -> np.ndarray:
+        return self.curve["time_s"]
+
+    @property
+    def rel_density(self) -> np.ndarray:
+        return self.curve["rel_density"]
+
+    @property
+    def piston_displacement_mm(self) -> np.ndarray:
+        return self.curve["piston_displacement_mm"]
+
+    @property
+    def applied_stress_mpa(self) -> np.ndarray:
+        return self.curve["applied_stress_mpa"]
+
+    @property
+    def rho0(self) -> float:
+        """Initial relative density of the mesh."""
+        return float(self.rel_density[0])
+
+    def time_to_density(self, rho: float) -> float | None:
+        """Time [s] to reach density ``rho``, None if not reached."""
+        return interpolate_time(self.time_s, self.rel_density, rho)
+
+    def time_error_at_density(self, rho: float) -> float | None:
+        """Estimated time-discretisation error [s] of :meth:`time_to_density`."""
+        t = self.time_to_density(rho)
+        if t is None:
+            return None
+        return float(np.interp(t, self.time_s, self.curve["time_error_s"]))
+
+    def continuum(self) -> ContinuumModel:
+        """The continuum model for this run's material, load and exact rho0."""
+        c = self.case
+        return ContinuumModel(
+            creep_c=c.material.creep_c,
+            creep_n=c.material.creep_n,
+            stress_mpa=c.stress_mpa,
+            knockdown=c.knockdown,
+            ramp_time_s=c.ramp_time_s,
+            rho0=c.cell.rho0,
+        )
+
+    def summary(self) -> dict[str, Any]:
+        """Everything ``summary.json`` holds."""
+        c = self.case
+        m = c.material
+        marks = [r for r in MARK_DENSITIES if r > self.rho0]
+        times = {f"{r:g}": self.time_to_density(r) for r in marks}
+        reached = {k: v for k, v in times.items() if v is not None}
+        errors = {f"{r:g}": self.time_error_at_density(r) for r in marks}
+        model = self.continuum()
+        continuum_times = {f"{r:g}": float(model.time_to_density(r)[0]) for r in marks}
+        last = {k: float(v[-1]) for k, v in self.curve.items()}
+        lx, ly, lz = c.cell.lengths_mm
+        return {
+            "tidens_version": __version__,
+            "status": self.status,
+            "message": self.message,
+            "cell": {
+                "name": c.cell.name,
+                "lengths_mm": [lx, ly, lz],
+                "aspect_ratio": lz / lx,
+                "rho0_exact": c.cell.rho0,
+            },
+            "material": {
+                "preset": name_of(m),
+                "creep_c": m.creep_c,
+                "creep_n": m.creep_n,
+                "young_mpa": m.young_mpa,
+                "poisson": m.poisson,
+            },
+            "load": {
+                "stress_mpa": c.stress_mpa,
+                "knockdown": c.knockdown,
+                "ramp_time_s": c.ramp_time_s,
+            },
+            "solver": c.solver.as_dict(),
+            "mesh_level": c.solver.mesh_level,
+            "tolerance": c.solver.tolerance,
+            "rho0": self.rho0,
+            "final_density": last["rel_density"],
+            "final_time_s": last["time_s"],
+            "times_to_density_s": reached,
+            "time_error_estimate_s": {k: v for k, v in errors.items() if k in reached},
+            "continuum_times_to_density_s": continuum_times,
+            "wall_seconds": self.wall_seconds,
+            "steps": int(last["step"]),
+            "newton_iterations": int(last["newton_total"]),
+            "degrees_of_freedom": self.degrees_of_freedom,
+            "nodes": self.nodes,
+            "elements": self.elements,
+            "max_penetration_mm": float(np.max(self.curve["max_penetration_mm"])),
+            "stats": self.stats,
+        }
+
+    def write_csv(self, path: str | Path) -> Path:
+        """Writes the curve to ``path`` (CSV with a header row)."""
+        p = Path(path)
+        io.write_curve(p, self.curve)
+        return p
+
+    def write_summary(self, path: str | Path) -> Path:
+        p = Path(path)
+        io.write_summary(p, self.summary())
+        return p
+
+    def write_vtu(self, out_dir: str | Path) -> list[Path]:
+        """Writes every snapshot as ``fields_<label>.vtu`` plus ``fields.pvd``."""
+        d = Path(out_dir)
+        entries = [(s.time_s, io.write_vtu(d / f"fields_{s.label}.vtu", s)) for s in self.snapshots]
+        if entries:
+            io.write_pvd(d / "fields.pvd", entries)
+        return [p for _, p in entries]
+
+    def plot(self, path: str | Path | None = None) -> Figure:
+        """Density versus time beside the continuum model; saved to ``path`` if given."""
+        from .plot import plot_density
+
+        fig = plot_density(self)
+        if path is not None:
+            fig.savefig(Path(path), dpi=150, bbox_inches="tight")
+        return fig

@@ -1,0 +1,130 @@
+"""The Python API: runs, results, errors, partial results, threads."""
+
+import dataclasses
+import math
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tidens_rs as td
+
+
+def test_run_gives_a_consistent_curve(quick_case: td.Case) -> None:
+    r = quick_case.run(until_density=0.6)
+    assert r.status == "reached_density"
+    c = r.curve
+    n = len(r.time_s)
+    assert all(len(v) == n for v in c.values())
+    assert np.all(np.diff(r.time_s) > 0)
+    assert np.all(np.diff(r.rel_density) >= -1e-12)
+    assert r.rel_density[-1] >= 0.6
+    # The coarse mesh's volume is within 2 % of the sphere octant's.
+    assert r.rho0 == pytest.approx(math.pi / 6, rel=0.02)
+    # Density is particle volume over the current cell volume.
+    lx, ly, lz = quick_case.cell.lengths_mm
+    rho = c["particle_volume_mm3"] / (lx * ly * (lz + c["piston_displacement_mm"]))
+    assert np.allclose(rho, r.rel_density, rtol=1e-12)
+    # Stage 1 ramps the stress linearly over 1 s, stage 2 holds it.
+    assert np.allclose(r.applied_stress_mpa, 10.0 * np.minimum(r.time_s / 1.0, 1.0), rtol=1e-12)
+    # The ramp end is a step end.
+    assert np.any(np.isclose(r.time_s, 1.0, rtol=0, atol=1e-12))
+    t6 = r.time_to_density(0.6)
+    assert t6 is not None and r.time_s[-2] <= t6 <= r.time_s[-1]
+
+
+def test_snapshots_land_on_requested_times(quick_case: td.Case) -> None:
+    r = quick_case.run(until_density=0.58, snapshot_times_s=[0.37, 2.5], snapshot_densities=[0.55])
+    labels = [s.label for s in r.snapshots]
+    assert labels == ["t0.37s", "rho0.550", "t2.5s", "final"] or labels == ["t0.37s", "t2.5s", "rho0.550", "final"]
+    for s in r.snapshots:
+        if s.label.startswith("t"):
+            assert s.time_s == pytest.approx(float(s.label[1:-1]), abs=1e-12)
+        if s.label.startswith("rho"):
+            assert s.rel_density >= 0.55
+        f = s.fields
+        assert f["points"].shape == (r.nodes, 3) and f["cells"].shape == (r.elements, 8)
+
+
+def test_callback_stops_the_run(quick_case: td.Case) -> None:
+    seen: list[int] = []
+
+    def cb(p: dict[str, float]) -> bool:
+        seen.append(int(p["step"]))
+        return len(seen) < 5
+
+    r = quick_case.run(until_density=0.9, callback=cb)
+    assert r.status == "stopped"
+    assert seen == [1, 2, 3, 4, 5] and len(r.time_s) == 6
+
+
+def test_solver_failure_keeps_the_partial_result(quick_case: td.Case, tmp_path: Path) -> None:
+    case = dataclasses.replace(quick_case, solver=td.SolverSettings(mesh_level=1, max_steps=3))
+    with pytest.raises(td.ConvergenceError, match="step limit 3") as info:
+        case.run(until_density=0.9, out_dir=tmp_path)
+    partial = info.value.result  # type: ignore[attr-defined]
+    assert partial.status == "failed" and len(partial.time_s) == 4
+    rows = (tmp_path / "curve.csv").read_text().strip().splitlines()
+    assert len(rows) == 1 + 4
+    assert (tmp_path / "summary.json").exists() and (tmp_path / "fields_final.vtu").exists()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"stress_mpa": -1.0}, "stress"),
+        ({"knockdown": 1.5}, "knockdown"),
+        ({"ramp_time_s": -1.0}, "ramp_time"),
+        ({"solver": td.SolverSettings(mesh_level=0)}, "level"),
+        ({"solver": td.SolverSettings(tolerance=2.0)}, "tolerance"),
+    ],
+)
+def test_bad_input_names_the_parameter(quick_case: td.Case, kwargs: dict, name: str) -> None:
+    case = dataclasses.replace(quick_case, **kwargs)
+    with pytest.raises(ValueError, match=name):
+        case.run(until_density=0.6)
+
+
+def test_bad_cells_and_materials_name_the_parameter() -> None:
+    with pytest.raises(ValueError, match="aspect_ratio"):
+        td.cells.sc(aspect_ratio=9.0)
+    with pytest.raises(ValueError, match="radius"):
+        td.cells.sc(radius_mm=-1.0)
+    with pytest.raises(ValueError, match="nu"):
+        td.materials.custom(1e-5, 1.0, poisson=0.6)
+    with pytest.raises(ValueError, match="ti64-creep-1293k"):
+        td.materials.by_name("titanium")
+
+
+def test_target_density_must_exceed_rho0(quick_case: td.Case) -> None:
+    with pytest.raises(ValueError, match="until_density"):
+        quick_case.run(until_density=0.5)
+
+
+def test_tmp_formula_agrees_with_the_preset() -> None:
+    c = td.materials.tmp_creep_coefficient(0.0096, 191.0, 7.4, 2.8)
+    assert c == pytest.approx(td.materials.TI64_TMP_1133_1293K.creep_c, rel=0.01)
+
+
+def test_solves_release_the_gil(quick_case: td.Case) -> None:
+    sim = dataclasses.replace(quick_case, solver=td.SolverSettings(mesh_level=2)).simulation(until_density=0.9)
+    done = threading.Event()
+    steps = 0
+
+    def work() -> None:
+        nonlocal steps
+        while not done.is_set() and steps < 15:
+            sim.advance()
+            steps += 1
+        done.set()
+
+    th = threading.Thread(target=work)
+    count = 0
+    th.start()
+    while not done.is_set():
+        count += 1
+    th.join()
+    # Had the solver held the GIL, this loop would have stalled for the
+    # whole of each step.
+    assert steps > 0 and count > 10_000

@@ -1,0 +1,66 @@
+"""The continuum model (DESIGN.md section 8) against properties it must have."""
+
+import math
+
+import numpy as np
+import pytest
+
+from tidens_rs.continuum import ContinuumModel
+
+RHO0 = math.pi / 6
+
+
+def model(**kw: float) -> ContinuumModel:
+    base = dict(creep_c=4.8e-7, creep_n=2.8, stress_mpa=10.0, rho0=RHO0)
+    base.update(kw)
+    return ContinuumModel(**base)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("n", [1.0, 2.8, 4.3])
+def test_time_integral_has_the_closed_form_rate_as_derivative(n: float) -> None:
+    m = model(creep_n=n, creep_c=1e-4 / 10**n)
+    for rho in (0.6, 0.75, 0.85, 0.93, 0.97):
+        h = 1e-5
+        dtdrho = (m.effective_time(rho + h)[0] - m.effective_time(rho - h)[0]) / (2 * h)
+        assert dtdrho * float(m.rate(rho)) == pytest.approx(1.0, rel=1e-6)
+
+
+def test_integral_converges_with_quadrature_points() -> None:
+    m = model()
+    t = m.effective_time([0.7, 0.9, 0.95], points=4000)
+    assert np.allclose(m.effective_time([0.7, 0.9, 0.95]), t, rtol=1e-9)
+
+
+def test_times_scale_as_stress_to_the_minus_n() -> None:
+    m1, m2 = model(), model(stress_mpa=20.0)
+    r = [0.6, 0.8, 0.95]
+    assert np.allclose(m1.time_to_density(r) / m2.time_to_density(r), 2**2.8, rtol=1e-12)
+    # The knock-down factor acts on the stress.
+    assert np.allclose(model(knockdown=0.5, stress_mpa=20.0).time_to_density(r), m1.time_to_density(r))
+
+
+def test_ramp_delays_the_hold_by_n_over_n_plus_one_of_the_ramp() -> None:
+    n, tr = 2.8, 5.0
+    plain, ramped = model(), model(ramp_time_s=tr)
+    r = [0.8, 0.9]
+    assert np.allclose(ramped.time_to_density(r) - plain.time_to_density(r), n * tr / (n + 1))
+    # Inside the ramp: t_eff = t^(n+1) / ((n+1) tr^n).
+    t = np.array([0.5, 2.0, 4.9])
+    te = t ** (n + 1) / ((n + 1) * tr**n)
+    assert np.allclose(ramped.time_from_effective(te), t)
+
+
+def test_rate_falls_with_density_and_the_curve_is_monotone() -> None:
+    m = model()
+    t, rho = m.curve(0.98)
+    assert np.all(np.diff(t) > 0) and np.all(np.diff(rho) > 0)
+    assert t[0] == 0.0 and rho[0] == pytest.approx(RHO0)
+
+
+@pytest.mark.parametrize(
+    ("name", "value"),
+    [("creep_c", -1.0), ("creep_n", 0.5), ("stress_mpa", 0.0), ("rho0", 0.95), ("knockdown", 1.5)],
+)
+def test_bad_parameters_name_themselves(name: str, value: float) -> None:
+    with pytest.raises(ValueError, match=name):
+        model(**{name: value})
