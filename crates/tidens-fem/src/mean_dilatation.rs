@@ -158,7 +158,7 @@ pub fn evaluate(
             }
         }
         let resp = material
-            .update_deviatoric(&f, &states_n[gp], dt)
+            .update_deviatoric(&f, &states_n[gp], dt, with_tangent)
             .map_err(|_| FemError::Inverted { element, det_f })?;
         states[gp] = resp.state;
         max_dp = max_dp.max(resp.dp);
@@ -171,9 +171,8 @@ pub fn evaluate(
                     w * (0..3).map(|j| resp.tau_dev[(i, j)] * g[a][j]).sum::<f64>();
             }
         }
-        if with_tangent {
+        if let Some(at) = &resp.tangent {
             // t[(ij), (b k)] = sum_l a[(ij),(kl)] g_b,l
-            let at = &resp.tangent;
             let mut t = [[0.0; 24]; 9];
             for (ij, row) in t.iter_mut().enumerate() {
                 for b in 0..8 {

@@ -15,7 +15,7 @@ fn kirchhoff(
     s: &PointState,
     dt: f64,
 ) -> (Matrix3<f64>, PointState) {
-    let r = m.update_deviatoric(f, s, dt).unwrap();
+    let r = m.update_deviatoric(f, s, dt, false).unwrap();
     let p = m.bulk_modulus() * f.determinant().ln();
     (r.tau_dev + Matrix3::identity() * p, r.state)
 }

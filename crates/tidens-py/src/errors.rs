@@ -9,7 +9,8 @@ use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::prelude::*;
 use tidens_material::MaterialError;
-use tidens_mesh::{MAX_LEVEL, MeshError};
+use tidens_mesh::MeshError;
+use tidens_solver::MAX_MESH_LEVEL;
 use tidens_solver::SolverError;
 
 create_exception!(
@@ -81,7 +82,7 @@ pub(crate) fn parameter_error(
 
 /// `ValueError` for an out-of-range mesh level.
 pub(crate) fn mesh_level_error(level: impl std::fmt::Display) -> PyErr {
-    parameter_error("mesh_level", level, &format!("in 1..={MAX_LEVEL}"))
+    parameter_error("mesh_level", level, &format!("in 1..={MAX_MESH_LEVEL}"))
 }
 
 /// Maps a material error: bad parameters and unknown presets are bad input;

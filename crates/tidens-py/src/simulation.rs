@@ -114,7 +114,7 @@ impl PySimulation {
         until_time_s = None,
         mesh_level = 3,
         grading = 1.0,
-        tolerance = 0.005,
+        tolerance = 0.01,
         max_strain_increment = 0.2,
         dt_initial_s = None,
         dt_max_s = f64::INFINITY,

@@ -18,7 +18,7 @@ mod simulation;
 
 pub use error::SolverError;
 pub use load::LoadHistory;
-pub use scene::{ASPECT_RANGE, Cell, MeshOptions, Octant, Scene};
+pub use scene::{ASPECT_RANGE, Cell, MAX_MESH_LEVEL, MeshOptions, Octant, RADIUS_RANGE, Scene};
 pub use settings::{NewtonSettings, Settings};
 pub use simulation::{CurvePoint, Fields, RunStats, Simulation, Status};
 pub use tidens_material::{Material, Preset};

@@ -11,15 +11,17 @@
 //! sizes).
 
 use crate::error::SolverError;
-use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::perm::PermRef;
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, SymbolicCholesky, SymmetricOrdering, factorize_symbolic_cholesky,
+    CholeskySymbolicParams, IntranodeLbltRef, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 use tidens_fem::SparseSystem;
 
-/// Which factorisation solved the last system.
+/// Which factorisation holds the current factor.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Factorization {
     /// Cholesky LL^T (symmetric positive definite).
@@ -28,33 +30,77 @@ pub enum Factorization {
     Lblt,
 }
 
-/// Counts of factorisations done, by kind.
+/// Counts of factorisations and solves done.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct FactorizationCounts {
     pub llt: usize,
     pub lblt: usize,
+    /// Solves, including those reusing an earlier factor.
+    pub solves: usize,
 }
 
-/// A reusable sparse symmetric solver for one sparsity pattern.
-#[derive(Default)]
+/// The numeric factor of the last factorised matrix.
+enum Numeric {
+    None,
+    Llt,
+    Lblt {
+        subdiag: Vec<f64>,
+        fwd: Vec<usize>,
+        bwd: Vec<usize>,
+    },
+}
+
+/// A reusable sparse symmetric solver for one sparsity pattern: the symbolic
+/// structure is computed once, the numeric factor is kept until the next
+/// [`LinearSolver::factorize`], so that several right-hand sides (modified
+/// Newton iterations) can be solved with one factor.
 pub struct LinearSolver {
     symbolic: Option<SymbolicCholesky<usize>>,
     values: Vec<f64>,
+    numeric: Numeric,
     pub counts: FactorizationCounts,
 }
 
+impl Default for LinearSolver {
+    fn default() -> Self {
+        Self {
+            symbolic: None,
+            values: Vec::new(),
+            numeric: Numeric::None,
+            counts: FactorizationCounts::default(),
+        }
+    }
+}
+
+fn out_of_memory(what: &str, bytes: usize) -> SolverError {
+    SolverError::Linear(format!(
+        "out of memory: the {what} needs {:.2} GB; use a coarser mesh level",
+        bytes as f64 / 1e9
+    ))
+}
+
+fn buffer(req: StackReq, what: &str) -> Result<MemBuffer, SolverError> {
+    MemBuffer::try_new(req).map_err(|_| out_of_memory(what, req.size_bytes()))
+}
+
 impl LinearSolver {
-    /// Solves `A x = b` in place (`rhs` holds `b` on entry, `x` on exit),
-    /// reading the lower triangle of `A`.
-    pub fn solve(
-        &mut self,
-        sys: &SparseSystem,
-        rhs: &mut [f64],
-    ) -> Result<Factorization, SolverError> {
+    /// True when a numeric factor is available for [`LinearSolver::solve`].
+    pub fn has_factor(&self) -> bool {
+        !matches!(self.numeric, Numeric::None)
+    }
+
+    /// Forgets the numeric factor.
+    pub fn invalidate(&mut self) {
+        self.numeric = Numeric::None;
+    }
+
+    /// Factorises `A` (its lower triangle is read).
+    pub fn factorize(&mut self, sys: &SparseSystem) -> Result<Factorization, SolverError> {
+        self.numeric = Numeric::None;
         let n = sys.dim();
         let sym = SymbolicSparseColMatRef::new_checked(n, n, sys.col_ptr(), None, sys.row_idx());
         let mat = SparseColMatRef::new(sym, sys.values());
-        if self.symbolic.is_none() {
+        if self.symbolic.as_ref().is_none_or(|s| s.nrows() != n) {
             let s = factorize_symbolic_cholesky(
                 sym,
                 Side::Lower,
@@ -62,49 +108,47 @@ impl LinearSolver {
                 CholeskySymbolicParams::default(),
             )
             .map_err(|e| SolverError::Linear(format!("symbolic factorisation: {e:?}")))?;
-            self.values = vec![0.0; s.len_val()];
+            let len = s.len_val();
+            let mut values = Vec::new();
+            values
+                .try_reserve_exact(len)
+                .map_err(|_| out_of_memory("sparse factor", 8 * len))?;
+            values.resize(len, 0.0);
+            self.values = values;
             self.symbolic = Some(s);
         }
         let symbolic = self
             .symbolic
             .as_ref()
             .ok_or_else(|| SolverError::Linear("no symbolic factorisation".into()))?;
-        if symbolic.nrows() != n {
-            return Err(SolverError::Linear(format!(
-                "system of size {n} does not match the symbolic factorisation ({})",
-                symbolic.nrows()
-            )));
-        }
         let par = Par::Seq;
-        let rhs_mat = MatMut::from_column_major_slice_mut(rhs, n, 1);
+        let mut scratch = buffer(
+            symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
+            "factorisation workspace",
+        )?;
         let llt = symbolic.factorize_numeric_llt::<f64>(
             &mut self.values,
             mat,
             Side::Lower,
             Default::default(),
             par,
-            MemStack::new(&mut MemBuffer::new(
-                symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()),
-            )),
+            MemStack::new(&mut scratch),
             Default::default(),
         );
-        if let Ok(llt) = llt {
+        if llt.is_ok() {
             self.counts.llt += 1;
-            llt.solve_in_place_with_conj(
-                Conj::No,
-                rhs_mat,
-                par,
-                MemStack::new(&mut MemBuffer::new(
-                    symbolic.solve_in_place_scratch::<f64>(1, par),
-                )),
-            );
-            return check_finite(rhs, Factorization::Llt);
+            self.numeric = Numeric::Llt;
+            return Ok(Factorization::Llt);
         }
         // Not positive definite: symmetric indefinite factorisation.
         let mut subdiag = vec![0.0; n];
         let mut fwd = vec![0usize; n];
         let mut bwd = vec![0usize; n];
-        let lblt = symbolic.factorize_numeric_intranode_lblt::<f64>(
+        let mut scratch = buffer(
+            symbolic.factorize_numeric_intranode_lblt_scratch::<f64>(par, Default::default()),
+            "factorisation workspace",
+        )?;
+        symbolic.factorize_numeric_intranode_lblt::<f64>(
             &mut self.values,
             &mut subdiag,
             &mut fwd,
@@ -112,31 +156,57 @@ impl LinearSolver {
             mat,
             Side::Lower,
             par,
-            MemStack::new(&mut MemBuffer::new(
-                symbolic.factorize_numeric_intranode_lblt_scratch::<f64>(par, Default::default()),
-            )),
+            MemStack::new(&mut scratch),
             Default::default(),
         );
         self.counts.lblt += 1;
-        lblt.solve_in_place_with_conj(
-            Conj::No,
-            rhs_mat,
-            par,
-            MemStack::new(&mut MemBuffer::new(
-                symbolic.solve_in_place_scratch::<f64>(1, par),
-            )),
-        );
-        check_finite(rhs, Factorization::Lblt)
+        self.numeric = Numeric::Lblt { subdiag, fwd, bwd };
+        Ok(Factorization::Lblt)
     }
-}
 
-fn check_finite(x: &[f64], kind: Factorization) -> Result<Factorization, SolverError> {
-    if x.iter().all(|v| v.is_finite()) {
-        Ok(kind)
-    } else {
-        Err(SolverError::Linear(format!(
-            "{kind:?} solve gave a non-finite solution (singular tangent)"
-        )))
+    /// Solves `A x = b` in place with the current factor (`rhs` holds `b` on
+    /// entry, `x` on exit).
+    pub fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolverError> {
+        let symbolic = self
+            .symbolic
+            .as_ref()
+            .ok_or_else(|| SolverError::Linear("solve before factorisation".into()))?;
+        let n = symbolic.nrows();
+        if rhs.len() != n {
+            return Err(SolverError::Linear(format!(
+                "right-hand side of length {} for a system of size {n}",
+                rhs.len()
+            )));
+        }
+        let par = Par::Seq;
+        let mut scratch = buffer(
+            symbolic.solve_in_place_scratch::<f64>(1, par),
+            "solve workspace",
+        )?;
+        let stack = MemStack::new(&mut scratch);
+        let rhs_mat = MatMut::from_column_major_slice_mut(rhs, n, 1);
+        match &self.numeric {
+            Numeric::None => return Err(SolverError::Linear("no numeric factor".into())),
+            Numeric::Llt => LltRef::new(symbolic, &self.values).solve_in_place_with_conj(
+                Conj::No,
+                rhs_mat,
+                par,
+                stack,
+            ),
+            Numeric::Lblt { subdiag, fwd, bwd } => {
+                let perm = PermRef::new_checked(fwd, bwd, n);
+                IntranodeLbltRef::new(symbolic, &self.values, subdiag, perm)
+                    .solve_in_place_with_conj(Conj::No, rhs_mat, par, stack)
+            }
+        }
+        self.counts.solves += 1;
+        if rhs.iter().all(|v| v.is_finite()) {
+            Ok(())
+        } else {
+            Err(SolverError::Linear(
+                "the solve gave a non-finite solution (singular tangent)".into(),
+            ))
+        }
     }
 }
 
@@ -173,7 +243,8 @@ mod tests {
             let a = chain(n, shift);
             let x_true: Vec<f64> = (0..n).map(|i| (i as f64 * 0.3).sin()).collect();
             let mut b = a.mul_vec(&x_true);
-            assert_eq!(solver.solve(&a, &mut b).unwrap(), kind);
+            assert_eq!(solver.factorize(&a).unwrap(), kind);
+            solver.solve(&mut b).unwrap();
             let err = b
                 .iter()
                 .zip(&x_true)
@@ -181,6 +252,13 @@ mod tests {
                 .fold(0.0, f64::max);
             assert!(err < 1e-10, "shift {shift}: error {err}");
         }
-        assert_eq!(solver.counts, FactorizationCounts { llt: 2, lblt: 1 });
+        assert_eq!(
+            solver.counts,
+            FactorizationCounts {
+                llt: 2,
+                lblt: 1,
+                solves: 3
+            }
+        );
     }
 }

@@ -33,6 +33,11 @@ pub struct Cell {
 
 /// Allowed range of the spheroid aspect ratio c/a.
 pub const ASPECT_RANGE: (f64, f64) = (0.2, 5.0);
+/// Allowed range of the particle radius [mm].
+pub const RADIUS_RANGE: (f64, f64) = (1e-6, 1e3);
+/// Finest mesh level: level 6 needs about 2.5 GB for the sparse factor of the
+/// sc cell, level 7 about four times that.
+pub const MAX_MESH_LEVEL: u32 = 6;
 
 impl Cell {
     /// Simple cubic cell: one octant of a spheroid of semi-axes
@@ -40,8 +45,12 @@ impl Cell {
     /// any aspect ratio. The particle touches the planes x = Lx, y = Ly and the
     /// piston z = Lz at its three poles.
     pub fn sc(radius: f64, aspect: f64) -> Result<Cell, SolverError> {
-        if !(radius.is_finite() && radius > 0.0) {
-            return Err(SolverError::parameter("radius", radius, "> 0 mm"));
+        if !(radius >= RADIUS_RANGE.0 && radius <= RADIUS_RANGE.1) {
+            return Err(SolverError::parameter(
+                "radius",
+                radius,
+                "in [1e-6, 1e3] mm",
+            ));
         }
         if !(aspect >= ASPECT_RANGE.0 && aspect <= ASPECT_RANGE.1) {
             return Err(SolverError::parameter(
@@ -122,6 +131,13 @@ impl Scene {
                 "grading",
                 options.grading,
                 "in [1, 10]",
+            ));
+        }
+        if !(1..=MAX_MESH_LEVEL).contains(&options.level) {
+            return Err(SolverError::parameter(
+                "mesh_level",
+                options.level as f64,
+                format!("in 1..={MAX_MESH_LEVEL}"),
             ));
         }
         let divisions = divisions_for_level(options.level)?;

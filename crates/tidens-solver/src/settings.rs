@@ -38,10 +38,12 @@ pub struct Settings {
     /// Stop at this time [s].
     pub until_time: Option<f64>,
     /// Time-integration accuracy: the target relative error of the times
-    /// t(rho) from the backward-Euler steps (default 0.005). Each step's error
+    /// t(rho) from the backward-Euler steps (default 0.01). Each step's error
     /// estimate, half the step times the change of the log of the
     /// densification rate over it, weighted by the load factor to the n, is
-    /// held below `tolerance` times the step.
+    /// held below `tolerance` times the step (the change measured over the
+    /// last few steps, so that the jumps of the rate when a node touches a
+    /// plane steer the step by their trend).
     pub tolerance: f64,
     /// Largest equivalent plastic strain increment allowed at any Gauss point
     /// in one step (default 0.2): a robustness limit for Newton.
@@ -67,7 +69,7 @@ impl Settings {
             load,
             until_density: None,
             until_time: None,
-            tolerance: 0.005,
+            tolerance: 0.01,
             max_strain_increment: 0.2,
             dt_initial: None,
             dt_max: f64::INFINITY,

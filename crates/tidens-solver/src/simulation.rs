@@ -83,6 +83,9 @@ pub struct RunStats {
     pub linear_seconds: f64,
 }
 
+/// Steps over which the trend of the densification rate is measured.
+const RATE_WINDOW: usize = 4;
+
 /// A converged Newton solve of one step.
 struct Solved {
     u: Vec<f64>,
@@ -90,6 +93,17 @@ struct Solved {
     eval: BodyEvaluation,
     f_int: Vec<f64>,
     iterations: usize,
+}
+
+/// A trial point of the line search.
+struct LineSearchPoint {
+    norm_sq: f64,
+    norm: f64,
+    u: Vec<f64>,
+    piston: f64,
+    eval: BodyEvaluation,
+    f_int: Vec<f64>,
+    step: f64,
 }
 
 /// A failed Newton solve.
@@ -105,6 +119,8 @@ pub struct Simulation {
     constraints: Constraints,
     system: SparseSystem,
     linear: LinearSolver,
+    /// The equation map the current factor was computed with.
+    factor_map: Option<Vec<usize>>,
     settings: Settings,
     dt_min: f64,
     full_force: f64,
@@ -114,6 +130,8 @@ pub struct Simulation {
     piston: f64,
     previous: Option<(Vec<f64>, f64, f64)>,
     last_rate: Option<f64>,
+    /// (step, |change of ln rate| weighted) of the last accepted steps.
+    rate_history: std::collections::VecDeque<(f64, f64)>,
     dt_next: f64,
     time_error: f64,
     f_int: Vec<f64>,
@@ -177,6 +195,7 @@ impl Simulation {
             constraints,
             system,
             linear: LinearSolver::default(),
+            factor_map: None,
             settings,
             dt_min,
             full_force,
@@ -185,6 +204,7 @@ impl Simulation {
             piston: 0.0,
             previous: None,
             last_rate: None,
+            rate_history: std::collections::VecDeque::new(),
             dt_next: dt0,
             time_error: 0.0,
             f_int: vec![0.0; n_dof],
@@ -461,25 +481,23 @@ impl Simulation {
         let tol = self.settings.tolerance;
         // Per-step time error of backward Euler: it evaluates the rate at the
         // end of the step, so the time it takes is off by half the step times
-        // the relative change of the rate (weighted by (sigma/sigma_max)^n:
-        // during the ramp a time shift counts at the reduced load).
-        // A step that did not move (no Newton iteration) says nothing of the rate.
+        // the change of the log of the rate over it, weighted by
+        // (sigma/sigma_max)^n (during the ramp a time shift counts at the
+        // reduced load). A step that did not move says nothing of the rate.
         let moved = iterations > 0 && rate.abs() * dt > 1e-12;
-        let (psi, signed_error) = match self.last_rate {
-            Some(r0) if moved && r0 > 0.0 && rate > 0.0 => {
-                let dln = (r0 / rate).ln();
-                (0.5 * dln.abs() * weight / tol, 0.5 * dt * dln * weight)
-            }
-            _ => (0.0, 0.0),
+        let dln = match self.last_rate {
+            Some(r0) if moved && r0 > 0.0 && rate > 0.0 => (r0 / rate).ln() * weight,
+            _ => 0.0,
         };
-        // Only the strain-increment limit rejects a step: the rate-change
-        // estimate also sees the jumps of the contact area when a node touches
-        // a plane, which no step size removes; it steers the next step instead.
+        let signed_error = 0.5 * dt * dln;
+        // Only the strain-increment limit rejects a step. The rate also jumps
+        // when a node touches a plane: such a jump is in the past once seen, so
+        // the step is steered by the trend of the rate over the last few steps
+        // rather than by the last change alone.
         let psi_dp = max_dp / self.settings.max_strain_increment;
         if psi_dp > 2.0 && dt > 4.0 * self.dt_min {
             return Err(dt * (0.8 / psi_dp).max(0.1));
         }
-        let worst = psi.max(psi_dp);
         // Accept.
         self.stats.steps += 1;
         self.stats.newton_iterations += iterations;
@@ -491,17 +509,42 @@ impl Simulation {
         self.time_error += signed_error;
         self.f_int = s.f_int;
         self.fields = s.eval.fields();
+        let had_rate = self.last_rate.is_some();
         if moved && rate > 0.0 {
             self.last_rate = Some(rate);
         }
+        if moved && had_rate {
+            if self.rate_history.len() == RATE_WINDOW {
+                self.rate_history.pop_front();
+            }
+            self.rate_history.push_back((dt, dln.abs()));
+        }
         let newton_factor: f64 = match iterations {
-            0..=3 => 2.0,
-            4..=6 => 1.5,
-            7..=10 => 1.0,
+            0..=4 => 2.0,
+            5..=8 => 1.5,
+            9..=12 => 1.0,
             _ => 0.7,
         };
-        let accuracy_factor = if worst > 0.0 { 0.9 / worst } else { 2.0 };
-        self.dt_next = dt * newton_factor.min(accuracy_factor).clamp(0.25, 2.0);
+        // Step for which half the windowed rate-change speed times the step
+        // equals the tolerance: the error per unit step is `tol`.
+        let (span, change) = self
+            .rate_history
+            .iter()
+            .fold((0.0, 0.0), |(a, b), (d, c)| (a + d, b + c));
+        let accuracy_dt = if change > 0.0 {
+            0.9 * 2.0 * tol * span / change
+        } else {
+            f64::INFINITY
+        };
+        let dp_dt = if psi_dp > 0.0 {
+            0.9 * dt / psi_dp
+        } else {
+            f64::INFINITY
+        };
+        self.dt_next = (newton_factor * dt)
+            .min(accuracy_dt)
+            .min(dp_dt)
+            .clamp(0.25 * dt, 2.0 * dt);
         let point = self.curve_point(volume, self.stats.steps, iterations, dt, max_dp);
         self.curve.push(point);
         Ok(())
@@ -522,6 +565,12 @@ impl Simulation {
     }
 
     /// Newton with line search for the step to `time + dt`.
+    ///
+    /// The factor of the tangent is kept across iterations and steps while
+    /// the equation map (the contact state) is unchanged and Newton contracts
+    /// the residual fast enough with it (modified Newton); otherwise the
+    /// tangent is assembled and factorised afresh. The tangent is computed
+    /// only in evaluations that may need it.
     fn solve_step(&mut self, dt: f64, extrapolate: bool) -> Result<Solved, Failed> {
         let t1 = self.time + dt;
         let force = self.full_force * self.settings.load.factor(t1);
@@ -530,30 +579,32 @@ impl Simulation {
         let n = self.constraints.dof_count();
         let mut u = self.u.clone();
         let mut piston = self.piston;
-        if extrapolate {
-            if let Some((u_prev, p_prev, dt_prev)) = &self.previous {
-                let r = dt / dt_prev;
-                for (x, xp) in u.iter_mut().zip(u_prev) {
-                    *x += r * (*x - xp);
-                }
-                piston += r * (piston - p_prev);
+        if extrapolate && let Some((u_prev, p_prev, dt_prev)) = &self.previous {
+            let r = dt / dt_prev;
+            for (x, xp) in u.iter_mut().zip(u_prev) {
+                *x += r * (*x - xp);
             }
+            piston += r * (piston - p_prev);
         }
         self.constraints.reset_flips();
         self.constraints.enforce(&mut u, piston);
         let fail = |reason: String, iterations: usize| Failed { reason, iterations };
         let eval_time = std::cell::Cell::new(0.0);
-        let evaluate = |body: &Body, u: &[f64]| {
+        let evaluate = |body: &Body, u: &[f64], tangent: bool| {
             let t0 = std::time::Instant::now();
-            let r = body.evaluate(u, dt, true).map_err(|e| e.to_string());
+            let r = body.evaluate(u, dt, tangent).map_err(|e| e.to_string());
             eval_time.set(eval_time.get() + t0.elapsed().as_secs_f64());
             r
         };
-        let mut eval = evaluate(&self.body, &u).map_err(|e| fail(e, 0))?;
+        // A fresh factorisation is due when none is usable or the last
+        // iteration contracted too slowly.
+        let mut refactor = !self.linear.has_factor();
+        let mut eval = evaluate(&self.body, &u, refactor).map_err(|e| fail(e, 0))?;
+        let mut has_tangent = refactor;
         let mut f_int = eval.internal_force(&self.body);
         let mut iterations = 0;
         let mut active_set_updates = 0;
-        loop {
+        let result = loop {
             // Contact: release tensile contacts, catch penetrating nodes.
             if active_set_updates < 50 {
                 let changes = self
@@ -562,24 +613,25 @@ impl Simulation {
                 if changes > 0 {
                     active_set_updates += 1;
                     self.constraints.enforce(&mut u, piston);
-                    eval = evaluate(&self.body, &u).map_err(|e| fail(e, iterations))?;
+                    eval =
+                        evaluate(&self.body, &u, has_tangent).map_err(|e| fail(e, iterations))?;
                     f_int = eval.internal_force(&self.body);
                 }
             }
             let map = self.constraints.equation_map();
             let r = self.residual(&f_int, &map, force);
             let r_norm = max_abs(&r);
-            if !r_norm.is_finite() {
-                return Err(fail("non-finite residual".into(), iterations));
-            }
             if std::env::var_os("TIDENS_DEBUG").is_some() {
                 eprintln!(
-                    "    it {iterations} |R| {r_norm:.3e} tol {tol:.3e} changes {active_set_updates} contacts {:?}",
+                    "    it {iterations} |R| {r_norm:.3e} tol {tol:.3e} refactor {refactor} contacts {:?}",
                     self.constraints.contact_counts()
                 );
             }
+            if !r_norm.is_finite() {
+                break Err(fail("non-finite residual".into(), iterations));
+            }
             if r_norm <= tol {
-                return Ok(Solved {
+                break Ok(Solved {
                     u,
                     piston,
                     eval,
@@ -588,7 +640,7 @@ impl Simulation {
                 });
             }
             if iterations >= self.settings.newton.max_iterations {
-                return Err(fail(
+                break Err(fail(
                     format!(
                         "{iterations} Newton iterations, residual {r_norm:.3e} N > {tol:.3e} N"
                     ),
@@ -596,32 +648,49 @@ impl Simulation {
                 ));
             }
             iterations += 1;
-            self.stats.evaluation_seconds += eval_time.replace(0.0);
-            let t0 = std::time::Instant::now();
-            // Tangent: element matrices scattered through the equation map;
-            // eliminated dofs keep a unit diagonal.
-            self.system.clear();
-            for (e, out) in eval.elements.iter().enumerate() {
-                self.system
-                    .add_block(&self.body.element_dofs(e), &out.tangent, &map);
+            if self.factor_map.as_deref() != Some(map.as_slice()) {
+                refactor = true;
             }
-            for (d, &m) in map.iter().enumerate() {
-                if m != d {
-                    self.system.add(d, d, 1.0);
+            if refactor {
+                if !has_tangent {
+                    eval = evaluate(&self.body, &u, true).map_err(|e| fail(e, iterations))?;
                 }
+                self.stats.evaluation_seconds += eval_time.replace(0.0);
+                let t0 = std::time::Instant::now();
+                // Tangent: element matrices scattered through the equation
+                // map; eliminated dofs keep a unit diagonal.
+                self.system.clear();
+                for (e, out) in eval.elements.iter().enumerate() {
+                    self.system
+                        .add_block(&self.body.element_dofs(e), &out.tangent, &map);
+                }
+                for (d, &m) in map.iter().enumerate() {
+                    if m != d {
+                        self.system.add(d, d, 1.0);
+                    }
+                }
+                let t1 = std::time::Instant::now();
+                self.stats.assembly_seconds += (t1 - t0).as_secs_f64();
+                let factorized = self.linear.factorize(&self.system);
+                self.stats.linear_seconds += t1.elapsed().as_secs_f64();
+                if let Err(e) = factorized {
+                    self.factor_map = None;
+                    break Err(fail(e.to_string(), iterations));
+                }
+                self.factor_map = Some(map.clone());
             }
             let mut du: Vec<f64> = r.iter().map(|x| -x).collect();
             let t1 = std::time::Instant::now();
-            self.stats.assembly_seconds += (t1 - t0).as_secs_f64();
-            self.linear
-                .solve(&self.system, &mut du)
-                .map_err(|e| fail(e.to_string(), iterations))?;
+            let solved = self.linear.solve(&mut du);
             self.stats.linear_seconds += t1.elapsed().as_secs_f64();
+            if let Err(e) = solved {
+                break Err(fail(e.to_string(), iterations));
+            }
             // Line search on the residual norm (backtracking with a quadratic
             // model of |R(s)|^2, at most three cuts).
             let r0_sq: f64 = r.iter().map(|x| x * x).sum();
             let mut s = 1.0;
-            let mut best: Option<(f64, Vec<f64>, f64, BodyEvaluation, Vec<f64>)> = None;
+            let mut best: Option<LineSearchPoint> = None;
             for _ in 0..4 {
                 let mut ut = u.clone();
                 for d in 0..n {
@@ -631,16 +700,24 @@ impl Simulation {
                 }
                 let pt = piston + s * du[n];
                 self.constraints.enforce(&mut ut, pt);
-                match evaluate(&self.body, &ut) {
+                match evaluate(&self.body, &ut, false) {
                     Ok(ev) => {
                         let ft = ev.internal_force(&self.body);
                         let rt = self.residual(&ft, &map, force);
                         let rt_sq: f64 = rt.iter().map(|x| x * x).sum();
-                        let better = best.as_ref().is_none_or(|b| rt_sq < b.0);
-                        if better {
-                            best = Some((rt_sq, ut, pt, ev, ft));
+                        let norm = max_abs(&rt);
+                        if best.as_ref().is_none_or(|b| rt_sq < b.norm_sq) {
+                            best = Some(LineSearchPoint {
+                                norm_sq: rt_sq,
+                                norm,
+                                u: ut,
+                                piston: pt,
+                                eval: ev,
+                                f_int: ft,
+                                step: s,
+                            });
                         }
-                        if rt_sq <= (1.0 - 1e-4 * s) * r0_sq || max_abs(&rt) <= tol {
+                        if rt_sq <= (1.0 - 1e-4 * s) * r0_sq || norm <= tol {
                             break;
                         }
                         s *= (r0_sq / (rt_sq + r0_sq)).clamp(0.1, 0.5);
@@ -648,16 +725,22 @@ impl Simulation {
                     Err(_) => s *= 0.25,
                 }
             }
-            let Some((_, ut, pt, ev, ft)) = best else {
-                return Err(fail(
+            let Some(b) = best else {
+                break Err(fail(
                     "every line-search point inverts an element".into(),
                     iterations,
                 ));
             };
-            u = ut;
-            piston = pt;
-            eval = ev;
-            f_int = ft;
-        }
+            // Modified Newton pays only while it contracts fast: refactorise
+            // after a slow or damped iteration.
+            refactor = b.norm > 0.2 * r_norm || b.step < 1.0;
+            u = b.u;
+            piston = b.piston;
+            eval = b.eval;
+            f_int = b.f_int;
+            has_tangent = false;
+        };
+        self.stats.evaluation_seconds += eval_time.get();
+        result
     }
 }
