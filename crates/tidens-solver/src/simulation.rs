@@ -483,8 +483,9 @@ impl Simulation {
         // end of the step, so the time it takes is off by half the step times
         // the change of the log of the rate over it, weighted by
         // (sigma/sigma_max)^n (during the ramp a time shift counts at the
-        // reduced load). A step that did not move says nothing of the rate.
-        let moved = iterations > 0 && rate.abs() * dt > 1e-12;
+        // reduced load). A step whose strain increment is within the noise
+        // that the Newton tolerance leaves says nothing of the rate.
+        let moved = (rate * dt).abs() > 1e-9;
         let dln = match self.last_rate {
             Some(r0) if moved && r0 > 0.0 && rate > 0.0 => (r0 / rate).ln() * weight,
             _ => 0.0,
@@ -531,7 +532,8 @@ impl Simulation {
             .rate_history
             .iter()
             .fold((0.0, 0.0), |(a, b), (d, c)| (a + d, b + c));
-        let accuracy_dt = if change > 0.0 {
+        // A step too small to show the rate lets the step grow.
+        let accuracy_dt = if moved && change > 0.0 {
             0.9 * 2.0 * tol * span / change
         } else {
             f64::INFINITY
