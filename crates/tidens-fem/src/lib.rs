@@ -1,6 +1,5 @@
 //! Finite elements and assembly for tidens (units: mm, N, MPa, s).
 //!
-//! - [`hex8`]: the trilinear hexahedron (VTK node order) and its 2x2x2 Gauss rule.
 //! - [`Body`] (the entry type): a meshed deformable body made of mean-dilatation
 //!   Q1/P0 hexahedra (Simo, Taylor and Pister 1985) of one [`Material`]. It
 //!   evaluates element residuals and consistent tangents in parallel and keeps
@@ -14,7 +13,6 @@
 
 mod body;
 mod error;
-pub mod hex8;
 mod mean_dilatation;
 mod sparse;
 

@@ -28,9 +28,9 @@
 //! term is the second variation of the current volume.
 
 use crate::error::FemError;
-use crate::hex8;
 use nalgebra::Matrix3;
 use tidens_material::{Material, PointState};
+use tidens_mesh::hex;
 
 /// Reference-configuration data of one element, computed once.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,8 +50,8 @@ impl ElementGeometry {
     pub fn new(x0: &[[f64; 3]; 8]) -> Result<Self, f64> {
         let mut grad = [[[0.0; 3]; 8]; 8];
         let mut weight = [0.0; 8];
-        for (gp, xi) in hex8::gauss_points().iter().enumerate() {
-            let dn = hex8::shape_gradients(*xi);
+        for (gp, xi) in hex::gauss_points().iter().enumerate() {
+            let dn = hex::shape_derivatives(*xi);
             let mut jac = Matrix3::zeros();
             for a in 0..8 {
                 for i in 0..3 {

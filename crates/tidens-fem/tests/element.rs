@@ -5,47 +5,26 @@
 use nalgebra::{DMatrix, DVector, Matrix3, Rotation3};
 use tidens_fem::{Body, DOF_DROPPED, SparseSystem};
 use tidens_material::Material;
+use tidens_mesh::HexMesh;
 
 /// An n^3 block of unit size with interior nodes moved off the grid.
 fn distorted_block(n: usize, amp: f64) -> (Vec<[f64; 3]>, Vec<[usize; 8]>, Vec<bool>) {
-    let id = |i: usize, j: usize, k: usize| (k * (n + 1) + j) * (n + 1) + i;
-    let mut nodes = Vec::new();
-    let mut interior = Vec::new();
+    let mesh = HexMesh::block([1.0; 3], [n; 3]).unwrap();
     let h = 1.0 / n as f64;
-    for k in 0..=n {
-        for j in 0..=n {
-            for i in 0..=n {
-                let inside = i > 0 && i < n && j > 0 && j < n && k > 0 && k < n;
-                // Deterministic pseudo-random offsets.
-                let s = (i * 7 + j * 13 + k * 29) as f64;
-                let d = if inside { amp * h } else { 0.0 };
-                nodes.push([
-                    i as f64 * h + d * (s * 0.37).sin(),
-                    j as f64 * h + d * (s * 0.71).cos(),
-                    k as f64 * h + d * (s * 1.13).sin(),
-                ]);
-                interior.push(inside);
-            }
+    let mut nodes = mesh.nodes.clone();
+    let mut interior = Vec::with_capacity(nodes.len());
+    for (k, p) in nodes.iter_mut().enumerate() {
+        let inside = p.iter().all(|&x| x > 1e-12 && x < 1.0 - 1e-12);
+        if inside {
+            // Deterministic pseudo-random offsets.
+            let s = k as f64;
+            p[0] += amp * h * (s * 0.37).sin();
+            p[1] += amp * h * (s * 0.71).cos();
+            p[2] += amp * h * (s * 1.13).sin();
         }
+        interior.push(inside);
     }
-    let mut elements = Vec::new();
-    for k in 0..n {
-        for j in 0..n {
-            for i in 0..n {
-                elements.push([
-                    id(i, j, k),
-                    id(i + 1, j, k),
-                    id(i + 1, j + 1, k),
-                    id(i, j + 1, k),
-                    id(i, j, k + 1),
-                    id(i + 1, j, k + 1),
-                    id(i + 1, j + 1, k + 1),
-                    id(i, j + 1, k + 1),
-                ]);
-            }
-        }
-    }
-    (nodes, elements, interior)
+    (nodes, mesh.elements, interior)
 }
 
 fn affine_displacement(nodes: &[[f64; 3]], a: &Matrix3<f64>) -> Vec<f64> {

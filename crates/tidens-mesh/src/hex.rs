@@ -46,6 +46,11 @@ pub fn gauss_points() -> [[f64; 3]; 8] {
     CORNERS.map(|c| c.map(|v| v * GAUSS_2))
 }
 
+/// Values of the 8 trilinear shape functions at `xi`.
+pub fn shape(xi: [f64; 3]) -> [f64; 8] {
+    CORNERS.map(|c| 0.125 * (1.0 + c[0] * xi[0]) * (1.0 + c[1] * xi[1]) * (1.0 + c[2] * xi[2]))
+}
+
 /// Derivatives dN_i/d(xi, eta, zeta) of the 8 trilinear shape functions at `xi`.
 pub fn shape_derivatives(xi: [f64; 3]) -> [[f64; 3]; 8] {
     CORNERS.map(|c| {
@@ -194,6 +199,37 @@ mod tests {
 
     fn unit_cube() -> [[f64; 3]; 8] {
         CORNERS.map(|c| c.map(|v| 0.5 * (v + 1.0)))
+    }
+
+    #[test]
+    fn shape_functions_interpolate_and_sum_to_one() {
+        for (a, corner) in CORNERS.iter().enumerate() {
+            for (b, v) in shape(*corner).iter().enumerate() {
+                assert_eq!(*v, if a == b { 1.0 } else { 0.0 });
+            }
+        }
+        for p in gauss_points() {
+            assert!((shape(p).iter().sum::<f64>() - 1.0).abs() < 1e-15);
+            for k in 0..3 {
+                assert!(shape_derivatives(p).iter().map(|d| d[k]).sum::<f64>().abs() < 1e-15);
+            }
+        }
+    }
+
+    #[test]
+    fn shape_derivatives_match_finite_differences() {
+        let xi = [0.3, -0.7, 0.1];
+        let g = shape_derivatives(xi);
+        let h = 1e-6;
+        for k in 0..3 {
+            let (mut xp, mut xm) = (xi, xi);
+            xp[k] += h;
+            xm[k] -= h;
+            let (np, nm) = (shape(xp), shape(xm));
+            for a in 0..8 {
+                assert!(((np[a] - nm[a]) / (2.0 * h) - g[a][k]).abs() < 1e-9);
+            }
+        }
     }
 
     #[test]

@@ -270,13 +270,13 @@ impl Constraints {
                     }
                 }
                 None => {
-                    if let Some((p, high)) = self.penetration(d, u, piston) {
-                        if p > gap_tol {
-                            self.contact[d] = Some(high);
-                            u[d] = self.plane_position(d % 3, high, piston) - self.x0[d];
-                            self.flips[d] += 1;
-                            changes += 1;
-                        }
+                    if let Some((p, high)) = self.penetration(d, u, piston)
+                        && p > gap_tol
+                    {
+                        self.contact[d] = Some(high);
+                        u[d] = self.plane_position(d % 3, high, piston) - self.x0[d];
+                        self.flips[d] += 1;
+                        changes += 1;
                     }
                 }
             }

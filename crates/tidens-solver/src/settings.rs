@@ -83,23 +83,24 @@ impl Settings {
     /// Checks every value against its allowed range.
     pub fn validate(&self) -> Result<(), SolverError> {
         let l = &self.load;
-        if !(l.stress.is_finite() && l.stress > 0.0 && l.stress <= 1e4) {
-            return Err(SolverError::parameter(
-                "stress",
-                l.stress,
-                "in (0, 1e4] MPa",
-            ));
-        }
-        if !(l.knockdown.is_finite() && l.knockdown > 0.0 && l.knockdown <= 1.0) {
-            return Err(SolverError::parameter(
-                "knockdown",
-                l.knockdown,
-                "in (0, 1]",
-            ));
-        }
-        if !(l.ramp_time.is_finite() && l.ramp_time >= 0.0) {
-            return Err(SolverError::parameter("ramp_time", l.ramp_time, ">= 0 s"));
-        }
+        require(
+            "stress",
+            l.stress,
+            l.stress > 0.0 && l.stress <= 1e4,
+            "in (0, 1e4] MPa",
+        )?;
+        require(
+            "knockdown",
+            l.knockdown,
+            l.knockdown > 0.0 && l.knockdown <= 1.0,
+            "in (0, 1]",
+        )?;
+        require(
+            "ramp_time",
+            l.ramp_time,
+            l.ramp_time >= 0.0 && l.ramp_time.is_finite(),
+            ">= 0 s",
+        )?;
         if self.until_density.is_none() && self.until_time.is_none() {
             return Err(SolverError::parameter(
                 "until_density",
@@ -108,45 +109,43 @@ impl Settings {
             ));
         }
         if let Some(r) = self.until_density {
-            if !(r > 0.0 && r < 1.0) {
-                return Err(SolverError::parameter("until_density", r, "in (rho0, 1)"));
-            }
+            require("until_density", r, r > 0.0 && r < 1.0, "in (rho0, 1)")?;
         }
         if let Some(t) = self.until_time {
-            if !(t.is_finite() && t > 0.0) {
-                return Err(SolverError::parameter("until_time", t, "> 0 s and finite"));
-            }
+            require(
+                "until_time",
+                t,
+                t > 0.0 && t.is_finite(),
+                "> 0 s and finite",
+            )?;
         }
-        if !(self.tolerance >= 1e-6 && self.tolerance <= 0.5) {
-            return Err(SolverError::parameter(
-                "tolerance",
-                self.tolerance,
-                "in [1e-6, 0.5]",
-            ));
-        }
-        if !(self.max_strain_increment > 0.0 && self.max_strain_increment <= 2.0) {
-            return Err(SolverError::parameter(
-                "max_strain_increment",
-                self.max_strain_increment,
-                "in (0, 2]",
-            ));
-        }
+        let tol = self.tolerance;
+        require(
+            "tolerance",
+            tol,
+            (1e-6..=0.5).contains(&tol),
+            "in [1e-6, 0.5]",
+        )?;
+        let dp = self.max_strain_increment;
+        require(
+            "max_strain_increment",
+            dp,
+            dp > 0.0 && dp <= 2.0,
+            "in (0, 2]",
+        )?;
         if let Some(dt) = self.dt_initial {
-            if !(dt.is_finite() && dt > 0.0) {
-                return Err(SolverError::parameter("dt_initial", dt, "> 0 s"));
-            }
+            require("dt_initial", dt, dt > 0.0 && dt.is_finite(), "> 0 s")?;
         }
-        if !(self.dt_max > 0.0) {
-            return Err(SolverError::parameter("dt_max", self.dt_max, "> 0 s"));
-        }
+        require("dt_max", self.dt_max, self.dt_max > 0.0, "> 0 s")?;
         if let Some(dt) = self.dt_min {
-            if !(dt.is_finite() && dt > 0.0) {
-                return Err(SolverError::parameter("dt_min", dt, "> 0 s"));
-            }
+            require("dt_min", dt, dt > 0.0 && dt.is_finite(), "> 0 s")?;
         }
-        if self.max_steps == 0 {
-            return Err(SolverError::parameter("max_steps", 0.0, ">= 1"));
-        }
+        require(
+            "max_steps",
+            self.max_steps as f64,
+            self.max_steps >= 1,
+            ">= 1",
+        )?;
         if let Some(t) = self
             .time_targets
             .iter()
@@ -159,20 +158,30 @@ impl Settings {
             ));
         }
         let nw = &self.newton;
-        if !(1..=1000).contains(&nw.max_iterations) {
-            return Err(SolverError::parameter(
-                "newton.max_iterations",
-                nw.max_iterations as f64,
-                "in [1, 1000]",
-            ));
-        }
-        if !(nw.residual_tolerance >= 1e-14 && nw.residual_tolerance <= 1e-2) {
-            return Err(SolverError::parameter(
-                "newton.residual_tolerance",
-                nw.residual_tolerance,
-                "in [1e-14, 1e-2]",
-            ));
-        }
+        let it = nw.max_iterations;
+        require(
+            "newton.max_iterations",
+            it as f64,
+            (1..=1000).contains(&it),
+            "in [1, 1000]",
+        )?;
+        let rt = nw.residual_tolerance;
+        require(
+            "newton.residual_tolerance",
+            rt,
+            (1e-14..=1e-2).contains(&rt),
+            "in [1e-14, 1e-2]",
+        )?;
         Ok(())
+    }
+}
+
+/// `Ok` when `ok`, else the parameter error naming `name` and its range
+/// (NaN fails every range check written as a comparison).
+fn require(name: &'static str, value: f64, ok: bool, allowed: &str) -> Result<(), SolverError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(SolverError::parameter(name, value, allowed))
     }
 }

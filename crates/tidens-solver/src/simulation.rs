@@ -167,14 +167,14 @@ impl Simulation {
         let [lx, ly, lz] = scene.lengths;
         let full_force = settings.load.knockdown * settings.load.stress * lx * ly;
         let rho = body.reference_volume() / (lx * ly * lz);
-        if let Some(target) = settings.until_density {
-            if target <= rho {
-                return Err(SolverError::parameter(
-                    "until_density",
-                    target,
-                    format!("in ({rho:.5}, 1): above the initial density of the mesh"),
-                ));
-            }
+        if let Some(target) = settings.until_density
+            && target <= rho
+        {
+            return Err(SolverError::parameter(
+                "until_density",
+                target,
+                format!("in ({rho:.5}, 1): above the initial density of the mesh"),
+            ));
         }
         let creep_time = 1.0 / material.creep_rate(settings.load.knockdown * settings.load.stress);
         let dt0 = settings.dt_initial.unwrap_or_else(|| {
@@ -552,6 +552,30 @@ impl Simulation {
         Ok(())
     }
 
+    /// Scatters the element tangents of `eval` through the equation map
+    /// into the sparse system; eliminated dofs keep a unit diagonal.
+    fn assemble(&mut self, eval: &BodyEvaluation, map: &[usize]) {
+        self.system.clear();
+        for (e, out) in eval.elements.iter().enumerate() {
+            self.system
+                .add_block(&self.body.element_dofs(e), &out.tangent, map);
+        }
+        for (d, &m) in map.iter().enumerate() {
+            if m != d {
+                self.system.add(d, d, 1.0);
+            }
+        }
+    }
+
+    /// The consistent tangent at the current state for a step `dt` [s]: the
+    /// symmetric system Newton factorises (for diagnostics and benchmarks).
+    pub fn assemble_tangent(&mut self, dt: f64) -> Result<&SparseSystem, SolverError> {
+        let eval = self.body.evaluate(&self.u, dt, true)?;
+        let map = self.constraints.equation_map();
+        self.assemble(&eval, &map);
+        Ok(&self.system)
+    }
+
     /// Global residual: internal forces gathered into equations, plus the
     /// piston's load term `F` (the load potential is `F U`).
     fn residual(&self, f_int: &[f64], map: &[usize], force: f64) -> Vec<f64> {
@@ -659,18 +683,7 @@ impl Simulation {
                 }
                 self.stats.evaluation_seconds += eval_time.replace(0.0);
                 let t0 = std::time::Instant::now();
-                // Tangent: element matrices scattered through the equation
-                // map; eliminated dofs keep a unit diagonal.
-                self.system.clear();
-                for (e, out) in eval.elements.iter().enumerate() {
-                    self.system
-                        .add_block(&self.body.element_dofs(e), &out.tangent, &map);
-                }
-                for (d, &m) in map.iter().enumerate() {
-                    if m != d {
-                        self.system.add(d, d, 1.0);
-                    }
-                }
+                self.assemble(&eval, &map);
                 let t1 = std::time::Instant::now();
                 self.stats.assembly_seconds += (t1 - t0).as_secs_f64();
                 let factorized = self.linear.factorize(&self.system);

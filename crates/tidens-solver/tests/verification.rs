@@ -184,3 +184,54 @@ fn sc_cell_densifies_monotonically_and_conserves_particle_volume() {
     );
     assert!(sim.rel_density() >= 0.9);
 }
+
+/// The per-step time-error estimate of the adaptive backward-Euler steps
+/// equals the true error on a smooth problem: a Norton cube (stiff
+/// elasticity) squeezed to half its height, where the exact time to each
+/// height is known; and the error scales with the tolerance.
+#[test]
+fn time_error_estimate_matches_the_true_error_of_backward_euler() {
+    let (n, sigma, l0): (f64, f64, f64) = (2.8, 10.0, 1.0);
+    let c = 3e-4 / sigma.powf(n);
+    let mut errors = Vec::new();
+    for tol in [0.02, 0.005] {
+        let material = Material::new(4.35e6, 0.3, c, n).unwrap();
+        let scene = Scene::free_block([l0; 3], [1, 1, 1]).unwrap();
+        let load = LoadHistory {
+            stress: sigma,
+            knockdown: 1.0,
+            ramp_time: 0.0,
+        };
+        let mut settings = Settings::new(load);
+        settings.until_time = Some(1e9);
+        settings.tolerance = tol;
+        settings.dt_initial = Some(1.0);
+        let mut sim = Simulation::new(&scene, material, settings).unwrap();
+        let mut last = (0.0, 0.0, 0.0);
+        sim.run(|p| {
+            let h = l0 + p.piston_displacement;
+            let t_exact = ((h / l0).powf(-n) - 1.0) / (n * c * (sigma / l0).powf(n));
+            last = (p.time, t_exact, p.time_error);
+            h > 0.5 * l0
+        })
+        .unwrap();
+        let (t, t_exact, estimate) = last;
+        let error = t - t_exact;
+        assert!(
+            error > 0.0,
+            "backward Euler is late on a decelerating creep"
+        );
+        assert!(
+            (estimate / error - 1.0).abs() < 0.05,
+            "tol {tol}: estimate {estimate:.3} s vs true error {error:.3} s"
+        );
+        assert!(
+            error / t_exact < 1.2 * tol,
+            "tol {tol}: relative error {:.4}",
+            error / t_exact
+        );
+        errors.push(error / t_exact);
+    }
+    // First order: four times tighter, about four times smaller.
+    assert!(errors[1] < 0.5 * errors[0], "errors {errors:?}");
+}
