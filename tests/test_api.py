@@ -80,8 +80,8 @@ def test_solver_failure_keeps_the_partial_result(quick_case: td.Case, tmp_path: 
         ({"solver": td.SolverSettings(tolerance=2.0)}, "tolerance"),
     ],
 )
-def test_bad_input_names_the_parameter(quick_case: td.Case, kwargs: dict, name: str) -> None:
-    case = dataclasses.replace(quick_case, **kwargs)
+def test_bad_input_names_the_parameter(quick_case: td.Case, kwargs: dict[str, object], name: str) -> None:
+    case = dataclasses.replace(quick_case, **kwargs)  # type: ignore[arg-type]
     with pytest.raises(ValueError, match=name):
         case.run(until_density=0.6)
 

@@ -13,7 +13,7 @@ RHO0 = math.pi / 6
 def model(**kw: float) -> ContinuumModel:
     base = dict(creep_c=4.8e-7, creep_n=2.8, stress_mpa=10.0, rho0=RHO0)
     base.update(kw)
-    return ContinuumModel(**base)  # type: ignore[arg-type]
+    return ContinuumModel(**base)
 
 
 @pytest.mark.parametrize("n", [1.0, 2.8, 4.3])

@@ -74,6 +74,10 @@ def _material(args: argparse.Namespace) -> Material:
     return m
 
 
+def _fmt(value: float | None) -> str:
+    return "-" if value is None else f"{value:.4g}"
+
+
 def _report(result: Result) -> None:
     s = result.summary()
     print(f"status: {s['status']}   final density {s['final_density']:.4f} at t = {s['final_time_s']:.4g} s")
@@ -83,8 +87,7 @@ def _report(result: Result) -> None:
         fe = s["times_to_density_s"].get(k)
         err = s["time_error_estimate_s"].get(k)
         cm = s["continuum_times_to_density_s"].get(k)
-        fmt = lambda v: "-" if v is None else f"{v:.4g}"  # noqa: E731
-        print(f"{r:5.2f} {fmt(fe):>12} {fmt(err):>12} {fmt(cm):>16}")
+        print(f"{r:5.2f} {_fmt(fe):>12} {_fmt(err):>12} {_fmt(cm):>16}")
     print(
         f"wall {s['wall_seconds']:.1f} s, {s['steps']} steps, {s['newton_iterations']} Newton iterations, "
         f"{s['degrees_of_freedom']} dofs (mesh level {s['mesh_level']}, tolerance {s['tolerance']:g})"
