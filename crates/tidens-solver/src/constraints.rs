@@ -43,8 +43,10 @@ pub struct Constraints {
     unilateral: Vec<usize>,
 }
 
-/// After this many active-set changes in one step a dof keeps its state for
-/// the rest of the step (stops chattering between contact and release).
+/// After this many active-set changes in one step a dof may still come into
+/// contact but is no longer released in that step: this ends chattering
+/// between contact and release on the safe side (a small tensile contact
+/// force rather than a penetration).
 const MAX_FLIPS: u8 = 4;
 
 impl Constraints {
@@ -235,14 +237,16 @@ impl Constraints {
     }
 
     /// Updates the active set from the current state: free dofs that have
-    /// penetrated a plane by more than `gap_tol` [mm] come into contact (and
-    /// are put on it), dofs in contact whose reaction has become tensile by
+    /// penetrated a plane by more than `gap_tol` [mm] come into contact (they
+    /// are left where they are: [`Constraints::offsets`] says how far they are
+    /// off their plane, for the next linear solve to move them onto it), dofs
+    /// in contact whose reaction has become tensile by
     /// more than `force_tol` [N] are released. `f_int` is the internal force of
     /// the body; on a held dof it is the force the plane exerts. Returns the
     /// number of changes.
     pub fn update(
         &mut self,
-        u: &mut [f64],
+        u: &[f64],
         piston: f64,
         f_int: &[f64],
         force_tol: f64,
@@ -251,10 +255,8 @@ impl Constraints {
         let mut changes = 0;
         for k in 0..self.unilateral.len() {
             let d = self.unilateral[k];
-            if self.flips[d] >= MAX_FLIPS {
-                continue;
-            }
             match self.contact[d] {
+                Some(_) if self.flips[d] >= MAX_FLIPS => {}
                 Some(high) => {
                     // The plane pushes toward the box interior: -e on the high
                     // plane, +e on the low one. Anything else is tension.
@@ -274,7 +276,6 @@ impl Constraints {
                         && p > gap_tol
                     {
                         self.contact[d] = Some(high);
-                        u[d] = self.plane_position(d % 3, high, piston) - self.x0[d];
                         self.flips[d] += 1;
                         changes += 1;
                     }
@@ -282,6 +283,19 @@ impl Constraints {
             }
         }
         changes
+    }
+
+    /// Held dofs that are off their plane, with the displacement that puts
+    /// them on it [mm] (dofs that have just come into contact).
+    pub fn offsets(&self, u: &[f64], piston: f64) -> Vec<(usize, f64)> {
+        self.unilateral
+            .iter()
+            .filter_map(|&d| {
+                let high = self.contact[d]?;
+                let delta = self.plane_position(d % 3, high, piston) - self.x0[d] - u[d];
+                (delta != 0.0).then_some((d, delta))
+            })
+            .collect()
     }
 
     /// Starts a new step: every dof may change its contact state again.

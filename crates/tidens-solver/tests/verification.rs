@@ -231,3 +231,106 @@ fn time_error_estimate_matches_the_true_error_of_backward_euler() {
     // First order: four times tighter, about four times smaller.
     assert!(errors[1] < 0.5 * errors[0], "errors {errors:?}");
 }
+
+/// Stiff and extreme cases (DESIGN.md section 9) on the coarsest sc mesh:
+/// each reaches rho = 0.9 with a monotone density and no node inside a
+/// rigid plane at any converged step.
+#[test]
+fn extreme_cases_stay_physical() {
+    let ti64 = Preset::Ti64Creep1293K.material();
+    let cases: [(&str, Material, f64, f64); 6] = [
+        (
+            "n = 15",
+            Material::new(4.35e4, 0.3, 1e-4 / 10f64.powi(15), 15.0).unwrap(),
+            10.0,
+            1.0,
+        ),
+        (
+            "C = 1e-3 (creep faster than the ramp)",
+            Material::new(4.35e4, 0.3, 1e-3, 2.8).unwrap(),
+            10.0,
+            1.0,
+        ),
+        (
+            "C = 1e-12",
+            Material::new(4.35e4, 0.3, 1e-12, 2.8).unwrap(),
+            10.0,
+            1.0,
+        ),
+        ("E / sigma = 1e2", ti64, 435.0, 1.0),
+        ("c/a = 0.5", ti64, 10.0, 0.5),
+        ("c/a = 2", ti64, 10.0, 2.0),
+    ];
+    for (label, material, stress, aspect) in cases {
+        let cell = Cell::sc(0.05, aspect).unwrap();
+        let scene = Scene::from_cell(
+            &cell,
+            &MeshOptions {
+                level: 1,
+                grading: 1.0,
+            },
+        )
+        .unwrap();
+        let mut settings = Settings::new(LoadHistory {
+            stress,
+            knockdown: 1.0,
+            ramp_time: 1.0,
+        });
+        settings.until_density = Some(0.9);
+        settings.tolerance = 0.05;
+        let mut sim = Simulation::new(&scene, material, settings).unwrap();
+        let status = sim.run(|_| true).unwrap_or_else(|e| panic!("{label}: {e}"));
+        assert_eq!(status, Status::ReachedDensity, "{label}");
+        for w in sim.curve().windows(2) {
+            assert!(
+                w[1].rel_density >= w[0].rel_density - 1e-9,
+                "{label}: density fell at t = {}",
+                w[1].time
+            );
+            assert!(
+                w[1].max_penetration <= 1e-8 * 0.05 * aspect.max(1.0),
+                "{label}: penetration {}",
+                w[1].max_penetration
+            );
+            assert!(w[1].rel_density.is_finite() && w[1].piston_displacement.is_finite());
+        }
+    }
+}
+
+/// Results do not depend on the number of threads: elements are evaluated
+/// in parallel but summed in a fixed order, and the factorisation is
+/// sequential. The curves of one and two threads agree to the last bit.
+#[test]
+fn results_are_identical_across_thread_counts() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            let cell = Cell::sc(0.05, 1.0).unwrap();
+            let scene = Scene::from_cell(
+                &cell,
+                &MeshOptions {
+                    level: 2,
+                    grading: 1.0,
+                },
+            )
+            .unwrap();
+            let mut settings = Settings::new(LoadHistory {
+                stress: 10.0,
+                knockdown: 1.0,
+                ramp_time: 1.0,
+            });
+            settings.until_density = Some(0.6);
+            settings.tolerance = 0.05;
+            let mut sim =
+                Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
+            sim.run(|_| true).unwrap();
+            sim.curve().to_vec()
+        })
+    };
+    let (one, two) = (run(1), run(2));
+    assert!(one.len() > 10);
+    assert_eq!(one, two);
+}
