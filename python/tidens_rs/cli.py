@@ -45,7 +45,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--until-density", type=float, help="stop at this relative density")
     g.add_argument("--until-time", type=float, help="stop at this time [s]")
     g = p.add_argument_group("numerics")
-    g.add_argument("--mesh-level", type=int, default=DEFAULT_MESH_LEVEL, help=f"mesh level >= 1, each level refines the elements by about sqrt(2) (default {DEFAULT_MESH_LEVEL})")
+    g.add_argument("--mesh-level", type=int, default=DEFAULT_MESH_LEVEL, help=f"mesh level, 1 (coarsest) to 6; each level refines the elements by about sqrt(2) (default {DEFAULT_MESH_LEVEL})")
     g.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE, help=f"time-integration accuracy, relative error of t(rho) (default {DEFAULT_TOLERANCE:g})")
     g.add_argument("--grading", type=float, default=1.0, help="element-size ratio toward the contact points (default 1)")
     g.add_argument("--max-steps", type=int, default=100_000, help="step limit (default 100000)")

@@ -5,6 +5,35 @@ use tidens_solver::{
     Cell, LoadHistory, Material, MeshOptions, Preset, Scene, Settings, Simulation, Status,
 };
 
+/// The sc cell of `material` at `stress` [MPa] (1 s ramp), pressed to
+/// `until_density` on mesh `level` with time tolerance `tolerance`.
+fn sc_simulation(
+    material: Material,
+    stress: f64,
+    aspect: f64,
+    level: u32,
+    until_density: f64,
+    tolerance: f64,
+) -> Simulation {
+    let cell = Cell::sc(0.05, aspect).unwrap();
+    let scene = Scene::from_cell(
+        &cell,
+        &MeshOptions {
+            level,
+            grading: 1.0,
+        },
+    )
+    .unwrap();
+    let mut settings = Settings::new(LoadHistory {
+        stress,
+        knockdown: 1.0,
+        ramp_time: 1.0,
+    });
+    settings.until_density = Some(until_density);
+    settings.tolerance = tolerance;
+    Simulation::new(&scene, material, settings).unwrap()
+}
+
 /// Height of a Norton cube under constant force, rigid-viscoplastic:
 /// `L^-n = L0^-n + n C (F/(A0 L0))^n t_eff` (ladder item 2).
 fn analytic_height(l0: f64, c: f64, n: f64, nominal_stress: f64, t_eff: f64) -> f64 {
@@ -125,27 +154,12 @@ fn dense_block_in_the_die_relaxes_from_constrained_to_bulk_modulus() {
 #[test]
 fn sc_cell_densifies_monotonically_and_conserves_particle_volume() {
     let material = Preset::Ti64Creep1293K.material();
-    let cell = Cell::sc(0.05, 1.0).unwrap();
-    let scene = Scene::from_cell(
-        &cell,
-        &MeshOptions {
-            level: 1,
-            grading: 1.0,
-        },
-    )
-    .unwrap();
-    let mut settings = Settings::new(LoadHistory {
-        stress: 10.0,
-        knockdown: 1.0,
-        ramp_time: 1.0,
-    });
-    settings.until_density = Some(0.9);
-    settings.tolerance = 0.02;
-    let mut sim = Simulation::new(&scene, material, settings).unwrap();
+    let mut sim = sc_simulation(material, 10.0, 1.0, 1, 0.9, 0.02);
+    let exact_rho0 = Cell::sc(0.05, 1.0).unwrap().rho0();
     let v0 = sim.curve()[0].particle_volume;
     let rho0 = sim.curve()[0].rel_density;
     // Mesh volume error of the coarse octant is below 2 %.
-    assert!((rho0 / cell.rho0() - 1.0).abs() < 0.02);
+    assert!((rho0 / exact_rho0 - 1.0).abs() < 0.02);
     let k = material.bulk_modulus();
     let mut last_rho = rho0;
     let mut last_t = 0.0;
@@ -262,23 +276,7 @@ fn extreme_cases_stay_physical() {
         ("c/a = 2", ti64, 10.0, 2.0),
     ];
     for (label, material, stress, aspect) in cases {
-        let cell = Cell::sc(0.05, aspect).unwrap();
-        let scene = Scene::from_cell(
-            &cell,
-            &MeshOptions {
-                level: 1,
-                grading: 1.0,
-            },
-        )
-        .unwrap();
-        let mut settings = Settings::new(LoadHistory {
-            stress,
-            knockdown: 1.0,
-            ramp_time: 1.0,
-        });
-        settings.until_density = Some(0.9);
-        settings.tolerance = 0.05;
-        let mut sim = Simulation::new(&scene, material, settings).unwrap();
+        let mut sim = sc_simulation(material, stress, aspect, 1, 0.9, 0.05);
         let status = sim.run(|_| true).unwrap_or_else(|e| panic!("{label}: {e}"));
         assert_eq!(status, Status::ReachedDensity, "{label}");
         for w in sim.curve().windows(2) {
@@ -308,24 +306,7 @@ fn results_are_identical_across_thread_counts() {
             .build()
             .unwrap();
         pool.install(|| {
-            let cell = Cell::sc(0.05, 1.0).unwrap();
-            let scene = Scene::from_cell(
-                &cell,
-                &MeshOptions {
-                    level: 2,
-                    grading: 1.0,
-                },
-            )
-            .unwrap();
-            let mut settings = Settings::new(LoadHistory {
-                stress: 10.0,
-                knockdown: 1.0,
-                ramp_time: 1.0,
-            });
-            settings.until_density = Some(0.6);
-            settings.tolerance = 0.05;
-            let mut sim =
-                Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
+            let mut sim = sc_simulation(Preset::Ti64Creep1293K.material(), 10.0, 1.0, 2, 0.6, 0.05);
             sim.run(|_| true).unwrap();
             sim.curve().to_vec()
         })
