@@ -185,16 +185,23 @@ impl Constraints {
         mesh.elements
             .iter()
             .map(|el| {
-                let mut dofs: Vec<usize> = el
+                let dofs: Vec<usize> = el
                     .iter()
                     .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
                     .collect();
-                if dofs.iter().any(|&d| self.may_follow_piston(d)) {
-                    dofs.push(self.piston_equation());
-                }
-                dofs
+                self.clique(&dofs)
             })
             .collect()
+    }
+
+    /// The equations a coupling of body dofs `dofs` may touch in any contact
+    /// state: their own, and the piston's if any of them may follow it.
+    pub fn clique(&self, dofs: &[usize]) -> Vec<usize> {
+        let mut eqs = dofs.to_vec();
+        if dofs.iter().any(|&d| self.may_follow_piston(d)) {
+            eqs.push(self.piston_equation());
+        }
+        eqs
     }
 
     /// Puts every held dof on its plane.

@@ -8,6 +8,7 @@
 //! Cholesky ([`linear`]), and an adaptive step size with a per-step estimate
 //! of the time-discretisation error ([`Settings::tolerance`]).
 
+mod cell;
 pub mod constraints;
 mod error;
 pub mod linear;
@@ -16,9 +17,11 @@ mod scene;
 mod settings;
 mod simulation;
 
+pub use cell::{ASPECT_RANGE, Cell, DEFAULT_SIZE_RATIO, Octant, RADIUS_RANGE, SIZE_RATIO_RANGE};
 pub use error::SolverError;
 pub use load::LoadHistory;
-pub use scene::{ASPECT_RANGE, Cell, MAX_MESH_LEVEL, MeshOptions, Octant, RADIUS_RANGE, Scene};
-pub use settings::{NewtonSettings, Settings};
+pub use scene::{MAX_MESH_LEVEL, MeshOptions, Particle, Scene};
+pub use settings::{ContactOptions, NewtonSettings, Settings};
 pub use simulation::{CurvePoint, Fields, RunStats, Simulation, Status};
+pub use tidens_contact::ContactMode;
 pub use tidens_material::{Material, Preset};

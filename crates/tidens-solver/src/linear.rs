@@ -94,6 +94,13 @@ impl LinearSolver {
         self.numeric = Numeric::None;
     }
 
+    /// Forgets the symbolic structure too (the sparsity pattern changed).
+    pub fn reset_pattern(&mut self) {
+        self.numeric = Numeric::None;
+        self.symbolic = None;
+        self.values = Vec::new();
+    }
+
     /// Factorises `A` (its lower triangle is read).
     pub fn factorize(&mut self, sys: &SparseSystem) -> Result<Factorization, SolverError> {
         self.numeric = Numeric::None;

@@ -1,87 +1,15 @@
-//! What is simulated: a cell (a box whose faces are mirror planes, holding
-//! octants of particles at its corners, DESIGN.md section 2), meshed into a
-//! scene; and the plain blocks of the verification ladder.
+//! What is simulated: a cell meshed into a scene (one mesh of all its
+//! particles, with the curved surface of each), and the plain blocks of the
+//! verification ladder.
 
+use crate::cell::Cell;
 use crate::error::SolverError;
 use serde::{Deserialize, Serialize};
-use std::f64::consts::PI;
-use tidens_mesh::{HexMesh, OctantSpec, divisions_for_level};
+use tidens_mesh::{BoundaryFace, FaceKind, HexMesh, OctantSpec, divisions_for_level};
 
-/// One octant of a spheroid with semi-axes (a, a, c), c along z (the loading
-/// direction), centred at a corner of the cell box and pointing into it.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Octant {
-    /// For each axis, whether the centre sits at the high end (L_i) of the box.
-    pub corner: [bool; 3],
-    /// Semi-axis along x and y [mm].
-    pub a: f64,
-    /// Semi-axis along z [mm].
-    pub c: f64,
-}
-
-/// A periodic packing reduced by its mirror symmetries to the box
-/// [0, Lx] x [0, Ly] x [0, Lz] holding particle octants at its corners.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Cell {
-    /// Short name, e.g. "sc".
-    pub name: String,
-    /// Box edge lengths Lx, Ly, Lz [mm].
-    pub lengths: [f64; 3],
-    /// The particle pieces.
-    pub octants: Vec<Octant>,
-}
-
-/// Allowed range of the spheroid aspect ratio c/a.
-pub const ASPECT_RANGE: (f64, f64) = (0.2, 5.0);
-/// Allowed range of the particle radius [mm].
-pub const RADIUS_RANGE: (f64, f64) = (1e-6, 1e3);
 /// Finest mesh level: level 6 needs about 2.5 GB for the sparse factor of the
 /// sc cell, level 7 about four times that.
 pub const MAX_MESH_LEVEL: u32 = 6;
-
-impl Cell {
-    /// Simple cubic cell: one octant of a spheroid of semi-axes
-    /// (radius, radius, aspect * radius) in an a x a x c box; rho0 = pi/6 for
-    /// any aspect ratio. The particle touches the planes x = Lx, y = Ly and the
-    /// piston z = Lz at its three poles.
-    pub fn sc(radius: f64, aspect: f64) -> Result<Cell, SolverError> {
-        if !(radius >= RADIUS_RANGE.0 && radius <= RADIUS_RANGE.1) {
-            return Err(SolverError::parameter(
-                "radius",
-                radius,
-                "in [1e-6, 1e3] mm",
-            ));
-        }
-        if !(aspect >= ASPECT_RANGE.0 && aspect <= ASPECT_RANGE.1) {
-            return Err(SolverError::parameter(
-                "aspect_ratio",
-                aspect,
-                "in [0.2, 5] (c/a)",
-            ));
-        }
-        let (a, c) = (radius, aspect * radius);
-        Ok(Cell {
-            name: "sc".into(),
-            lengths: [a, a, c],
-            octants: vec![Octant {
-                corner: [false; 3],
-                a,
-                c,
-            }],
-        })
-    }
-
-    /// Initial relative density from the exact particle volumes (each octant
-    /// is pi a^2 c / 6).
-    pub fn rho0(&self) -> f64 {
-        let v: f64 = self
-            .octants
-            .iter()
-            .map(|o| PI * o.a * o.a * o.c / 6.0)
-            .sum();
-        v / (self.lengths[0] * self.lengths[1] * self.lengths[2])
-    }
-}
 
 /// Mesh resolution of a scene.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -102,6 +30,20 @@ impl Default for MeshOptions {
     }
 }
 
+/// One particle piece of a scene: its nodes and elements are contiguous
+/// ranges of the scene's mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Particle {
+    /// Index of the octant in the cell.
+    pub octant: usize,
+    /// First node and number of nodes.
+    pub nodes: (usize, usize),
+    /// First element and number of elements.
+    pub elements: (usize, usize),
+    /// Curved boundary quads (scene node ids, outward right-hand normal).
+    pub surface: Vec<[usize; 4]>,
+}
+
 /// A meshed problem: the box, whether the lateral die walls exist, and the
 /// body mesh. All six box faces are frictionless rigid mirror planes, except
 /// the lateral high faces (x = Lx, y = Ly) when `lateral_walls` is false.
@@ -110,22 +52,22 @@ impl Default for MeshOptions {
 pub struct Scene {
     pub lengths: [f64; 3],
     pub lateral_walls: bool,
+    /// All particles in one mesh (no shared nodes between particles).
     pub mesh: HexMesh,
+    /// The particle pieces (empty for the verification blocks).
+    pub particles: Vec<Particle>,
     /// Exact initial relative density of the geometry (not of the mesh), if known.
     pub rho0_exact: Option<f64>,
+    /// Length scale R of tolerances: the largest particle semi-axis, or the
+    /// largest box edge for blocks [mm].
+    pub radius: f64,
 }
 
 impl Scene {
-    /// Meshes a cell. Cells with more than one particle need particle-particle
-    /// contact, which this version does not have.
+    /// Meshes a cell: one spheroid octant mesh per particle, mirrored into
+    /// its corner, all in one mesh. Particles must not overlap (touching is
+    /// fine): no node of one may lie inside another's spheroid.
     pub fn from_cell(cell: &Cell, options: &MeshOptions) -> Result<Scene, SolverError> {
-        let [octant] = cell.octants.as_slice() else {
-            return Err(SolverError::Unsupported(format!(
-                "cell '{}' has {} particle pieces; only single-particle cells (sc) are supported until particle-particle contact exists",
-                cell.name,
-                cell.octants.len()
-            )));
-        };
         if !(options.grading >= 1.0 && options.grading <= 10.0) {
             return Err(SolverError::parameter(
                 "grading",
@@ -141,29 +83,57 @@ impl Scene {
             ));
         }
         let divisions = divisions_for_level(options.level)?;
-        let mesh = HexMesh::spheroid_octant(&OctantSpec {
-            a: octant.a,
-            c: octant.c,
-            divisions,
-            grading: options.grading,
-        })?;
-        let mesh = if octant.corner.iter().any(|&h| h) {
-            let offset = [0, 1, 2].map(|i| {
-                if octant.corner[i] {
-                    cell.lengths[i]
-                } else {
-                    0.0
-                }
-            });
-            mesh.mirrored(octant.corner).translated(offset)
-        } else {
-            mesh
+        let mut mesh = HexMesh {
+            nodes: Vec::new(),
+            elements: Vec::new(),
+            boundary: Vec::new(),
         };
+        let mut particles = Vec::with_capacity(cell.octants.len());
+        for (k, octant) in cell.octants.iter().enumerate() {
+            let piece = HexMesh::spheroid_octant(&OctantSpec {
+                a: octant.a,
+                c: octant.c,
+                divisions,
+                grading: options.grading,
+            })?;
+            let piece = if octant.corner.iter().any(|&h| h) {
+                piece
+                    .mirrored(octant.corner)
+                    .translated(octant.centre(cell.lengths))
+            } else {
+                piece
+            };
+            let (n0, e0) = (mesh.nodes.len(), mesh.elements.len());
+            mesh.nodes.extend_from_slice(&piece.nodes);
+            mesh.elements
+                .extend(piece.elements.iter().map(|el| el.map(|n| n + n0)));
+            let mut surface = Vec::new();
+            for f in &piece.boundary {
+                let face = BoundaryFace {
+                    nodes: f.nodes.map(|n| n + n0),
+                    element: f.element + e0,
+                    kind: f.kind,
+                };
+                if face.kind == FaceKind::Curved {
+                    surface.push(face.nodes);
+                }
+                mesh.boundary.push(face);
+            }
+            particles.push(Particle {
+                octant: k,
+                nodes: (n0, piece.nodes.len()),
+                elements: (e0, piece.elements.len()),
+                surface,
+            });
+        }
+        check_no_overlap(cell, &mesh, &particles)?;
         Ok(Scene {
             lengths: cell.lengths,
             lateral_walls: true,
             mesh,
+            particles,
             rho0_exact: Some(cell.rho0()),
+            radius: cell.largest_radius(),
         })
     }
 
@@ -174,7 +144,9 @@ impl Scene {
             lengths,
             lateral_walls: true,
             mesh: HexMesh::block(lengths, divisions)?,
+            particles: Vec::new(),
             rho0_exact: Some(1.0),
+            radius: lengths.iter().cloned().fold(0.0, f64::max),
         })
     }
 
@@ -186,31 +158,93 @@ impl Scene {
             lengths,
             lateral_walls: false,
             mesh: HexMesh::block(lengths, divisions)?,
+            particles: Vec::new(),
             rho0_exact: Some(1.0),
+            radius: lengths.iter().cloned().fold(0.0, f64::max),
         })
     }
+}
+
+/// Fails when a node of one particle lies inside another particle's
+/// spheroid (by more than a relative 1e-9 of its level function).
+fn check_no_overlap(
+    cell: &Cell,
+    mesh: &HexMesh,
+    particles: &[Particle],
+) -> Result<(), SolverError> {
+    for p in particles {
+        for q in particles {
+            if p.octant == q.octant {
+                continue;
+            }
+            let other = &cell.octants[q.octant];
+            let (first, count) = p.nodes;
+            if let Some(node) = mesh.nodes[first..first + count]
+                .iter()
+                .find(|x| other.level(cell.lengths, **x) < 1.0 - 1e-9)
+            {
+                return Err(SolverError::Unsupported(format!(
+                    "cell '{}': octants {} and {} overlap (a node of {} at {node:?} is inside {})",
+                    cell.name, p.octant, q.octant, p.octant, q.octant
+                )));
+            }
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cell::Octant;
 
     #[test]
-    fn sc_density_is_pi_over_six_for_any_aspect_ratio() {
-        for aspect in [0.5, 0.8, 1.0, 1.2, 2.0] {
-            let cell = Cell::sc(0.05, aspect).unwrap();
-            assert!((cell.rho0() - PI / 6.0).abs() < 1e-15);
+    fn meshed_cells_have_the_exact_density_to_mesh_accuracy() {
+        for cell in [
+            Cell::sc(0.05, 1.0).unwrap(),
+            Cell::bcc(0.05, 1.2).unwrap(),
+            Cell::fcc(0.05, 0.8).unwrap(),
+            Cell::sc2(0.05, 1.566, 1.0).unwrap(),
+        ] {
+            let mut errors = Vec::new();
+            for level in [2, 4] {
+                let scene = Scene::from_cell(
+                    &cell,
+                    &MeshOptions {
+                        level,
+                        grading: 1.0,
+                    },
+                )
+                .unwrap();
+                let [lx, ly, lz] = scene.lengths;
+                let rho = scene.mesh.volume() / (lx * ly * lz);
+                errors.push((rho / cell.rho0() - 1.0).abs());
+                assert_eq!(scene.particles.len(), cell.octants.len());
+                assert!(scene.mesh.min_scaled_jacobian() > 0.5);
+            }
+            // Second order in the element size (a factor 2 between levels 2 and 4).
+            assert!(
+                errors[1] < 0.35 * errors[0] && errors[1] < 0.005,
+                "{}: {errors:?}",
+                cell.name
+            );
         }
-        assert!(matches!(
-            Cell::sc(-1.0, 1.0),
-            Err(SolverError::Parameter { name: "radius", .. })
-        ));
-        assert!(matches!(
-            Cell::sc(1.0, 9.0),
-            Err(SolverError::Parameter {
-                name: "aspect_ratio",
-                ..
-            })
-        ));
+    }
+
+    #[test]
+    fn overlapping_octants_are_refused() {
+        let o = |corner| Octant {
+            corner,
+            a: 0.6,
+            c: 0.6,
+        };
+        let cell = Cell::new(
+            "bad",
+            [1.0; 3],
+            vec![o([false; 3]), o([true, false, false])],
+        )
+        .unwrap();
+        let err = Scene::from_cell(&cell, &MeshOptions::default()).unwrap_err();
+        assert!(err.to_string().contains("overlap"), "{err}");
     }
 }

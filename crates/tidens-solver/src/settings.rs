@@ -3,6 +3,7 @@
 use crate::error::SolverError;
 use crate::load::LoadHistory;
 use serde::{Deserialize, Serialize};
+use tidens_contact::ContactMode;
 
 /// Newton iteration settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -25,6 +26,34 @@ impl Default for NewtonSettings {
             max_iterations: 25,
             residual_tolerance: 1e-6,
             extrapolate: true,
+        }
+    }
+}
+
+/// Contact settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ContactOptions {
+    /// Between particles: frictionless sliding (default) or tied once closed.
+    pub mode: ContactMode,
+    /// Sensitivity option, not the default: tie surface nodes that touch a
+    /// rigid plane of the die (no tangential sliding on the wall).
+    pub tied_planes: bool,
+    /// Penalty stiffness as a multiple of E / h, h the mean surface element
+    /// size (default 10); the augmented Lagrangian removes its effect on the
+    /// result down to the penetration tolerance.
+    pub penalty_factor: f64,
+    /// Largest penetration allowed in a converged step, as a fraction of the
+    /// largest particle radius R (default 1e-4 as required; solved to 0.5e-4).
+    pub penetration_tolerance: f64,
+}
+
+impl Default for ContactOptions {
+    fn default() -> Self {
+        Self {
+            mode: ContactMode::Frictionless,
+            tied_planes: false,
+            penalty_factor: 10.0,
+            penetration_tolerance: 1e-4,
         }
     }
 }
@@ -60,6 +89,7 @@ pub struct Settings {
     /// Times at which a step must end (e.g. snapshot times) [s].
     pub time_targets: Vec<f64>,
     pub newton: NewtonSettings,
+    pub contact: ContactOptions,
 }
 
 impl Settings {
@@ -77,6 +107,7 @@ impl Settings {
             max_steps: 100_000,
             time_targets: Vec::new(),
             newton: NewtonSettings::default(),
+            contact: ContactOptions::default(),
         }
     }
 
@@ -171,6 +202,21 @@ impl Settings {
             rt,
             (1e-14..=1e-2).contains(&rt),
             "in [1e-14, 1e-2]",
+        )?;
+        let c = &self.contact;
+        let pf = c.penalty_factor;
+        require(
+            "contact.penalty_factor",
+            pf,
+            (0.01..=1e4).contains(&pf),
+            "in [0.01, 1e4]",
+        )?;
+        let pt = c.penetration_tolerance;
+        require(
+            "contact.penetration_tolerance",
+            pt,
+            (1e-8..=1e-2).contains(&pt),
+            "in [1e-8, 1e-2] (fraction of R)",
         )?;
         Ok(())
     }

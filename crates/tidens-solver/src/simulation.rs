@@ -7,6 +7,7 @@ use crate::linear::{FactorizationCounts, LinearSolver};
 use crate::scene::Scene;
 use crate::settings::Settings;
 use serde::{Deserialize, Serialize};
+use tidens_contact::{ContactEvaluation, ContactSettings, ContactSurface, ParticleContact};
 use tidens_fem::{Body, BodyEvaluation, DOF_DROPPED, ElementFields, SparseSystem};
 use tidens_material::Material;
 
@@ -61,6 +62,8 @@ pub struct Fields {
     pub displacement: Vec<[f64; 3]>,
     /// Force exerted by the rigid planes on each node [N].
     pub contact_force: Vec<[f64; 3]>,
+    /// Particle-particle contact pressure at each node [MPa] (0 where none).
+    pub contact_pressure: Vec<f64>,
     /// Hexahedra (VTK order).
     pub cells: Vec<[usize; 8]>,
     /// Element fields (von Mises, mean stress, equivalent plastic strain).
@@ -81,6 +84,8 @@ pub struct RunStats {
     pub assembly_seconds: f64,
     /// Wall time in sparse factorisations and solves [s].
     pub linear_seconds: f64,
+    /// Times the sparsity pattern grew for new particle contacts.
+    pub pattern_rebuilds: usize,
 }
 
 /// Steps over which the trend of the densification rate is measured.
@@ -90,8 +95,7 @@ const RATE_WINDOW: usize = 4;
 struct Solved {
     u: Vec<f64>,
     piston: f64,
-    eval: BodyEvaluation,
-    f_int: Vec<f64>,
+    eval: Evaluation,
     iterations: usize,
 }
 
@@ -101,8 +105,7 @@ struct LineSearchPoint {
     norm: f64,
     u: Vec<f64>,
     piston: f64,
-    eval: BodyEvaluation,
-    f_int: Vec<f64>,
+    eval: Evaluation,
     step: f64,
 }
 
@@ -139,6 +142,73 @@ pub struct Simulation {
     curve: Vec<CurvePoint>,
     stats: RunStats,
     status: Status,
+    /// Contact between particles (scenes with more than one particle).
+    contact: Option<ParticleContact>,
+    /// Largest particle-contact penetration accepted in a step [mm].
+    penetration_tol: f64,
+    /// Element cliques and the contact cliques added to the pattern so far.
+    element_cliques: Vec<Vec<usize>>,
+    contact_cliques: std::collections::BTreeSet<Vec<usize>>,
+    /// The contact links (slave surface, node, master surface, triangle) the
+    /// current factor was computed with.
+    factor_links: Vec<[usize; 4]>,
+    /// Contact terms of the last converged step.
+    contact_eval: ContactEvaluation,
+    /// Time spent in evaluations not yet booked into `stats` [s].
+    eval_seconds: std::cell::Cell<f64>,
+}
+
+/// Element and contact contributions at one configuration.
+struct Evaluation {
+    body: BodyEvaluation,
+    contact: ContactEvaluation,
+    /// Internal force of the body plus the contact forces [N].
+    f_int: Vec<f64>,
+    has_tangent: bool,
+}
+
+type ContactState = (Vec<Option<bool>>, Option<tidens_contact::StateSnapshot>);
+
+fn links(c: &ContactEvaluation) -> Vec<[usize; 4]> {
+    c.terms
+        .iter()
+        .map(|t| [t.slave.0, t.slave.1, t.master.0, t.master.1])
+        .collect()
+}
+
+/// Contact between the particles of `scene`, when it has more than one: the
+/// penalty is `penalty_factor * E / h` with `h` the mean edge of the
+/// surface quads, and the search reaches one such edge from a surface.
+fn particle_contact(
+    scene: &Scene,
+    material: &Material,
+    settings: &Settings,
+) -> Result<Option<ParticleContact>, SolverError> {
+    if scene.particles.len() < 2 {
+        return Ok(None);
+    }
+    let surfaces = scene
+        .particles
+        .iter()
+        .map(|p| ContactSurface::from_quads(&p.surface, &scene.mesh.nodes))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| SolverError::Unsupported(e.to_string()))?;
+    let (count, area) = surfaces
+        .iter()
+        .flat_map(|s| s.areas.iter())
+        .fold((0usize, 0.0), |(n, a), x| (n + 1, a + x));
+    let h = (area / count.max(1) as f64).sqrt();
+    let c = &settings.contact;
+    let contact = ParticleContact::new(
+        surfaces,
+        ContactSettings {
+            mode: c.mode,
+            penalty: c.penalty_factor * material.young / h,
+            search_distance: h,
+        },
+    )
+    .map_err(|e| SolverError::Unsupported(e.to_string()))?;
+    Ok(Some(contact))
 }
 
 fn max_abs(v: &[f64]) -> f64 {
@@ -161,9 +231,10 @@ impl Simulation {
             material,
         )?;
         let constraints = Constraints::new(&scene.mesh, scene.lengths, scene.lateral_walls)?;
-        let cliques = constraints.element_cliques(&scene.mesh);
+        let element_cliques = constraints.element_cliques(&scene.mesh);
         let n_eq = constraints.dof_count() + 1;
-        let system = SparseSystem::from_cliques(n_eq, cliques.iter().map(|c| c.as_slice()));
+        let system = SparseSystem::from_cliques(n_eq, element_cliques.iter().map(|c| c.as_slice()));
+        let contact = particle_contact(scene, &material, &settings)?;
         let [lx, ly, lz] = scene.lengths;
         let full_force = settings.load.knockdown * settings.load.stress * lx * ly;
         let rho = body.reference_volume() / (lx * ly * lz);
@@ -187,6 +258,7 @@ impl Simulation {
             }
         });
         let dt_min = settings.dt_min.unwrap_or(1e-12 * dt0);
+        let penetration_tol = 0.5 * settings.contact.penetration_tolerance * scene.radius;
         let n_dof = constraints.dof_count();
         let eval = body.evaluate(&vec![0.0; n_dof], 0.0, false)?;
         let mut sim = Self {
@@ -212,6 +284,13 @@ impl Simulation {
             curve: Vec::new(),
             stats: RunStats::default(),
             status: Status::Running,
+            contact,
+            penetration_tol,
+            element_cliques,
+            contact_cliques: std::collections::BTreeSet::new(),
+            factor_links: Vec::new(),
+            contact_eval: ContactEvaluation::default(),
+            eval_seconds: std::cell::Cell::new(0.0),
         };
         let point = sim.curve_point(eval.volume(), 0, 0, 0.0, 0.0);
         sim.curve.push(point);
@@ -239,6 +318,37 @@ impl Simulation {
         let mut s = self.stats;
         s.factorizations = self.linear.counts;
         s
+    }
+
+    /// Per particle: the total force the other particles exert on it through
+    /// contact, and the total force the rigid planes exert on it, at the last
+    /// converged step [N]. For each particle the two balance (to the Newton
+    /// tolerance); the plane forces include the piston's.
+    pub fn particle_forces(&self, scene: &Scene) -> Vec<([f64; 3], [f64; 3])> {
+        let owner = |node: usize| {
+            scene
+                .particles
+                .iter()
+                .position(|p| node >= p.nodes.0 && node < p.nodes.0 + p.nodes.1)
+        };
+        let mut out = vec![([0.0; 3], [0.0; 3]); scene.particles.len()];
+        for t in &self.contact_eval.terms {
+            for (d, f) in t.dofs.iter().zip(&t.force) {
+                if let Some(p) = owner(d / 3) {
+                    // The force on the body is minus the internal force term.
+                    out[p].0[d % 3] -= f;
+                }
+            }
+        }
+        for (d, f) in self.f_int.iter().enumerate() {
+            if self.constraints.is_held(d)
+                && let Some(p) = owner(d / 3)
+            {
+                // A held dof's internal force is what the plane exerts on it.
+                out[p].1[d % 3] += f;
+            }
+        }
+        out
     }
 
     /// Degrees of freedom: free displacement components plus the piston, at
@@ -295,7 +405,10 @@ impl Simulation {
             particle_volume: volume,
             time_error: self.time_error,
             contacts: self.constraints.contact_counts().iter().sum(),
-            max_penetration: self.constraints.max_penetration(&self.u, self.piston),
+            max_penetration: self
+                .constraints
+                .max_penetration(&self.u, self.piston)
+                .max(self.contact_eval.max_penetration()),
         }
     }
 
@@ -318,10 +431,18 @@ impl Simulation {
                 }
             }));
         }
+        let mut contact_pressure = vec![0.0; nodes.len()];
+        if let Some(c) = &self.contact {
+            for t in &self.contact_eval.terms {
+                let node = c.surfaces()[t.slave.0].nodes[t.slave.1];
+                contact_pressure[node] = f64::max(contact_pressure[node], t.pressure);
+            }
+        }
         Fields {
             points,
             displacement,
             contact_force,
+            contact_pressure,
             cells: self.body.elements().to_vec(),
             element: self.fields.clone(),
         }
@@ -420,7 +541,7 @@ impl Simulation {
         let mut dt = self.propose_dt();
         let mut iterations = 0;
         loop {
-            let contact_saved = self.constraints.contact_state();
+            let saved = self.contact_state();
             match self.solve_step(dt) {
                 Ok(solved) => {
                     iterations += solved.iterations;
@@ -428,7 +549,7 @@ impl Simulation {
                         Ok(()) => break,
                         Err(shorter) => {
                             self.stats.rejected_steps += 1;
-                            self.constraints.set_contact_state(contact_saved);
+                            self.restore_contact_state(saved);
                             dt = shorter;
                         }
                     }
@@ -436,7 +557,7 @@ impl Simulation {
                 Err(f) => {
                     iterations += f.iterations;
                     self.stats.failed_attempts += 1;
-                    self.constraints.set_contact_state(contact_saved);
+                    self.restore_contact_state(saved);
                     dt *= 0.25;
                     if dt < self.dt_min {
                         self.stats.newton_iterations += iterations;
@@ -459,8 +580,8 @@ impl Simulation {
     /// Step control on a converged step: accepts it (and proposes the next
     /// step) or rejects it, returning the shorter step to retry.
     fn accept_or_reject(&mut self, s: Solved, dt: f64, iterations: usize) -> Result<(), f64> {
-        let volume = s.eval.volume();
-        let max_dp = s.eval.max_dp();
+        let volume = s.eval.body.volume();
+        let max_dp = s.eval.body.max_dp();
         let lz = self.lengths[2];
         // Piston log-strain rate: the densification rate whatever the scene.
         let rate = ((lz + self.piston) / (lz + s.piston)).ln() / dt;
@@ -491,14 +612,18 @@ impl Simulation {
         // Accept.
         self.stats.steps += 1;
         self.stats.newton_iterations += iterations;
-        self.body.commit(&s.eval);
+        self.body.commit(&s.eval.body);
         self.previous = Some((std::mem::take(&mut self.u), self.piston, dt));
         self.u = s.u;
         self.piston = s.piston;
         self.time = t1;
         self.time_error += signed_error;
-        self.f_int = s.f_int;
-        self.fields = s.eval.fields();
+        self.f_int = s.eval.f_int;
+        self.fields = s.eval.body.fields();
+        if let Some(c) = self.contact.as_mut() {
+            c.tie_closed(&s.eval.contact);
+        }
+        self.contact_eval = s.eval.contact;
         let had_rate = self.last_rate.is_some();
         if moved && rate > 0.0 {
             self.last_rate = Some(rate);
@@ -542,38 +667,54 @@ impl Simulation {
         Ok(())
     }
 
-    /// Scatters the element tangents of `eval` through the equation map
-    /// into the sparse system; eliminated dofs keep a unit diagonal.
-    fn assemble(&mut self, eval: &BodyEvaluation, map: &[usize]) {
+    /// Scatters the element and contact tangents of `eval` through the
+    /// equation map into the sparse system; eliminated dofs keep a unit
+    /// diagonal. False when a contact term fell outside the pattern.
+    fn assemble(&mut self, eval: &Evaluation, map: &[usize]) -> bool {
         self.system.clear();
-        for (e, out) in eval.elements.iter().enumerate() {
+        for (e, out) in eval.body.elements.iter().enumerate() {
             self.system
                 .add_block(&self.body.element_dofs(e), &out.tangent, map);
+        }
+        let mut missed = 0;
+        for t in &eval.contact.terms {
+            missed += self.system.add_block(&t.dofs, &t.tangent, map);
         }
         for (d, &m) in map.iter().enumerate() {
             if m != d {
                 self.system.add(d, d, 1.0);
             }
         }
+        missed == 0
     }
 
     /// `K v` over the body dofs for a vector `v` given by its non-zero
-    /// entries, from the element tangents of `eval`.
-    fn tangent_times(&self, eval: &BodyEvaluation, entries: &[(usize, f64)]) -> Vec<f64> {
+    /// entries, from the element and contact tangents of `eval`.
+    fn tangent_times(&self, eval: &Evaluation, entries: &[(usize, f64)]) -> Vec<f64> {
         let mut v = vec![0.0; self.constraints.dof_count()];
         for &(d, x) in entries {
             v[d] = x;
         }
         let mut out = vec![0.0; v.len()];
-        for (e, el) in eval.elements.iter().enumerate() {
-            let dofs = self.body.element_dofs(e);
+        let blocks = eval
+            .body
+            .elements
+            .iter()
+            .enumerate()
+            .map(|(e, el)| (self.body.element_dofs(e).to_vec(), &el.tangent))
+            .chain(
+                eval.contact
+                    .terms
+                    .iter()
+                    .map(|t| (t.dofs.to_vec(), &t.tangent)),
+            );
+        for (dofs, tangent) in blocks {
             if dofs.iter().all(|&d| v[d] == 0.0) {
                 continue;
             }
+            let m = dofs.len();
             for (p, &dp) in dofs.iter().enumerate() {
-                out[dp] += (0..24)
-                    .map(|q| el.tangent[p * 24 + q] * v[dofs[q]])
-                    .sum::<f64>();
+                out[dp] += (0..m).map(|q| tangent[p * m + q] * v[dofs[q]]).sum::<f64>();
             }
         }
         out
@@ -582,9 +723,15 @@ impl Simulation {
     /// The consistent tangent at the current state for a step `dt` [s]: the
     /// symmetric system Newton factorises (for diagnostics and benchmarks).
     pub fn assemble_tangent(&mut self, dt: f64) -> Result<&SparseSystem, SolverError> {
-        let eval = self.body.evaluate(&self.u, dt, true)?;
+        let u = self.u.clone();
+        let eval = self
+            .evaluate_state(&u, dt, true)
+            .map_err(SolverError::Linear)?;
         let map = self.constraints.equation_map();
-        self.assemble(&eval, &map);
+        if !self.assemble(&eval, &map) {
+            self.grow_pattern(&eval.contact);
+            self.assemble(&eval, &map);
+        }
         Ok(&self.system)
     }
 
@@ -617,13 +764,6 @@ impl Simulation {
         let n = self.constraints.dof_count();
         self.constraints.reset_flips();
         let fail = |reason: String, iterations: usize| Failed { reason, iterations };
-        let eval_time = std::cell::Cell::new(0.0);
-        let evaluate = |body: &Body, u: &[f64], tangent: bool| {
-            let t0 = std::time::Instant::now();
-            let r = body.evaluate(u, dt, tangent).map_err(|e| e.to_string());
-            eval_time.set(eval_time.get() + t0.elapsed().as_secs_f64());
-            r
-        };
         // Start from the displacement extrapolated from the last two steps:
         // on creep flow it is far closer to the solution than the last state
         // (even where stiff elasticity makes its residual larger).
@@ -639,16 +779,23 @@ impl Simulation {
             piston += ratio * (piston - p_prev);
         }
         self.constraints.enforce(&mut u, piston);
-        let mut eval = evaluate(&self.body, &u, false).map_err(|e| fail(e, 0))?;
-        let mut f_int = eval.internal_force(&self.body);
+        // Particle contact keeps each node's master facet for the whole step.
+        let x = self.current_coordinates(&u);
+        if let Some(c) = self.contact.as_mut() {
+            c.pair(&x);
+        }
+        let mut eval = self.evaluate_state(&u, dt, false).map_err(|e| fail(e, 0))?;
         let mut refactor = !self.linear.has_factor();
-        let mut has_tangent = false;
         let mut iterations = 0;
         let mut active_set_updates = 0;
+        let mut augmentations = 0;
         let result = loop {
             // Contact: release tensile contacts, catch penetrating nodes.
             if active_set_updates < 50
-                && self.constraints.update(&u, piston, &f_int, tol, gap_tol) > 0
+                && self
+                    .constraints
+                    .update(&u, piston, &eval.f_int, tol, gap_tol)
+                    > 0
             {
                 active_set_updates += 1;
             }
@@ -656,12 +803,14 @@ impl Simulation {
             // Nodes that have just come into contact are still off their
             // plane: the next solve moves them onto it.
             let offsets = self.constraints.offsets(&u, piston);
-            let r = self.residual(&f_int, &map, force);
+            let r = self.residual(&eval.f_int, &map, force);
             let r_norm = max_abs(&r);
             if std::env::var_os("TIDENS_DEBUG").is_some() {
                 eprintln!(
-                    "    it {iterations} |R| {r_norm:.3e} tol {tol:.3e} refactor {refactor} contacts {:?}",
-                    self.constraints.contact_counts()
+                    "    it {iterations} |R| {r_norm:.3e} tol {tol:.3e} refactor {refactor} planes {:?} particle contacts {} penetration {:.2e}",
+                    self.constraints.contact_counts(),
+                    eval.contact.terms.len(),
+                    eval.contact.max_penetration()
                 );
             }
             if !r_norm.is_finite() {
@@ -675,13 +824,34 @@ impl Simulation {
                         iterations,
                     ));
                 }
-                break Ok(Solved {
-                    u,
-                    piston,
-                    eval,
-                    f_int,
-                    iterations,
-                });
+                let contact_penetration = eval.contact.max_penetration();
+                if contact_penetration <= self.penetration_tol {
+                    break Ok(Solved {
+                        u,
+                        piston,
+                        eval,
+                        iterations,
+                    });
+                }
+                // Augmented Lagrangian: the multipliers take the pressures
+                // and the solve goes on until the penetration is small.
+                if augmentations >= 30 {
+                    break Err(fail(
+                        format!(
+                            "particle contact penetration {contact_penetration:.3e} mm after 30 augmentations"
+                        ),
+                        iterations,
+                    ));
+                }
+                augmentations += 1;
+                let x = self.current_coordinates(&u);
+                if let Some(c) = self.contact.as_mut() {
+                    c.augment(&x, &eval.contact);
+                }
+                eval = self
+                    .evaluate_state(&u, dt, false)
+                    .map_err(|e| fail(e, iterations))?;
+                continue;
             }
             if iterations >= self.settings.newton.max_iterations {
                 break Err(fail(
@@ -692,16 +862,24 @@ impl Simulation {
                 ));
             }
             iterations += 1;
-            if self.factor_map.as_deref() != Some(map.as_slice()) || !offsets.is_empty() {
+            let contact_links = links(&eval.contact);
+            if self.factor_map.as_deref() != Some(map.as_slice())
+                || self.factor_links != contact_links
+                || !offsets.is_empty()
+            {
                 refactor = true;
             }
             if refactor {
-                if !has_tangent {
-                    eval = evaluate(&self.body, &u, true).map_err(|e| fail(e, iterations))?;
+                if !eval.has_tangent {
+                    eval = self
+                        .evaluate_state(&u, dt, true)
+                        .map_err(|e| fail(e, iterations))?;
                 }
-                self.stats.evaluation_seconds += eval_time.replace(0.0);
                 let t0 = std::time::Instant::now();
-                self.assemble(&eval, &map);
+                if !self.assemble(&eval, &map) {
+                    self.grow_pattern(&eval.contact);
+                    self.assemble(&eval, &map);
+                }
                 let t1 = std::time::Instant::now();
                 self.stats.assembly_seconds += (t1 - t0).as_secs_f64();
                 let factorized = self.linear.factorize(&self.system);
@@ -711,6 +889,7 @@ impl Simulation {
                     break Err(fail(e.to_string(), iterations));
                 }
                 self.factor_map = Some(map.clone());
+                self.factor_links = links(&eval.contact);
             }
             let mut du: Vec<f64> = r.iter().map(|x| -x).collect();
             if !offsets.is_empty() {
@@ -743,24 +922,24 @@ impl Simulation {
                 }
                 let pt = piston + s * du[n];
                 self.constraints.enforce(&mut ut, pt);
-                match evaluate(&self.body, &ut, false) {
+                match self.evaluate_state(&ut, dt, false) {
                     Ok(ev) => {
-                        let ft = ev.internal_force(&self.body);
-                        let rt = self.residual(&ft, &map, force);
+                        let rt = self.residual(&ev.f_int, &map, force);
                         let rt_sq: f64 = rt.iter().map(|x| x * x).sum();
                         let norm = max_abs(&rt);
-                        if best.as_ref().is_none_or(|b| rt_sq < b.norm_sq) {
+                        let better = best.as_ref().is_none_or(|b| rt_sq < b.norm_sq);
+                        let done = rt_sq <= (1.0 - 1e-4 * s) * r0_sq || norm <= tol;
+                        if better {
                             best = Some(LineSearchPoint {
                                 norm_sq: rt_sq,
                                 norm,
                                 u: ut,
                                 piston: pt,
                                 eval: ev,
-                                f_int: ft,
                                 step: s,
                             });
                         }
-                        if rt_sq <= (1.0 - 1e-4 * s) * r0_sq || norm <= tol {
+                        if done {
                             break;
                         }
                         s *= (r0_sq / (rt_sq + r0_sq)).clamp(0.1, 0.5);
@@ -774,16 +953,93 @@ impl Simulation {
                     iterations,
                 ));
             };
+            if std::env::var_os("TIDENS_DEBUG").is_some() {
+                eprintln!("      line search: step {} |R| {:.3e}", b.step, b.norm);
+            }
             // Modified Newton pays only while it contracts fast: refactorise
             // after a slow or damped iteration.
             refactor = b.norm > 0.2 * r_norm || b.step < 1.0;
             u = b.u;
             piston = b.piston;
             eval = b.eval;
-            f_int = b.f_int;
-            has_tangent = false;
         };
-        self.stats.evaluation_seconds += eval_time.get();
+        self.stats.evaluation_seconds += self.eval_seconds.replace(0.0);
         result
+    }
+
+    /// The contact state of the rigid planes and of the particles, to redo a
+    /// step from.
+    fn contact_state(&self) -> ContactState {
+        (
+            self.constraints.contact_state(),
+            self.contact.as_ref().map(|c| c.state_snapshot()),
+        )
+    }
+
+    fn restore_contact_state(&mut self, (planes, particles): ContactState) {
+        self.constraints.set_contact_state(planes);
+        if let (Some(c), Some(saved)) = (self.contact.as_mut(), particles) {
+            c.restore(&saved);
+        }
+    }
+
+    /// Current node coordinates (flat, `3 * node + i`) for displacement `u`.
+    fn current_coordinates(&self, u: &[f64]) -> Vec<f64> {
+        self.body
+            .nodes()
+            .iter()
+            .flatten()
+            .zip(u)
+            .map(|(x, du)| x + du)
+            .collect()
+    }
+
+    /// Elements (in parallel) and particle contact at displacement `u`.
+    fn evaluate_state(&self, u: &[f64], dt: f64, tangent: bool) -> Result<Evaluation, String> {
+        let t0 = std::time::Instant::now();
+        let body = self
+            .body
+            .evaluate(u, dt, tangent)
+            .map_err(|e| e.to_string())?;
+        let mut f_int = body.internal_force(&self.body);
+        let contact = match &self.contact {
+            Some(c) => {
+                let ev = c.evaluate(&self.current_coordinates(u), tangent);
+                for t in &ev.terms {
+                    for (d, f) in t.dofs.iter().zip(&t.force) {
+                        f_int[*d] += f;
+                    }
+                }
+                ev
+            }
+            None => ContactEvaluation::default(),
+        };
+        self.eval_seconds
+            .set(self.eval_seconds.get() + t0.elapsed().as_secs_f64());
+        Ok(Evaluation {
+            body,
+            contact,
+            f_int,
+            has_tangent: tangent,
+        })
+    }
+
+    /// Adds the cliques of the contact terms of `contact` to the sparsity
+    /// pattern (which only grows) and starts a new symbolic factorisation.
+    fn grow_pattern(&mut self, contact: &ContactEvaluation) {
+        for t in &contact.terms {
+            let mut clique = self.constraints.clique(&t.dofs);
+            clique.sort_unstable();
+            self.contact_cliques.insert(clique);
+        }
+        let n_eq = self.constraints.dof_count() + 1;
+        let cliques = self
+            .element_cliques
+            .iter()
+            .chain(self.contact_cliques.iter());
+        self.system = SparseSystem::from_cliques(n_eq, cliques.map(|c| c.as_slice()));
+        self.linear.reset_pattern();
+        self.factor_map = None;
+        self.stats.pattern_rebuilds += 1;
     }
 }
