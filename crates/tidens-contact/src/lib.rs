@@ -6,32 +6,40 @@
 //! - detection with parry (`parry3d-f64`): each surface is triangulated in its
 //!   current configuration and the nodes of one surface are projected onto the
 //!   other's `TriMesh`, only for pairs of surfaces whose bounding boxes meet;
+//!   the triangle found names the quad facet the node is paired with;
 //! - enforcement node to surface, both ways (two-pass, each pass carrying half
-//!   the tributary area so that identical particles are treated alike), by an
-//!   augmented Lagrangian: the energy of a slave node of tributary area `A` is
-//!   `w A / (2 eps) <lambda + eps p>^2` with `p` its penetration into the plane
-//!   of the master triangle, `lambda` its contact pressure multiplier and
-//!   `<x> = max(x, 0)`. Its gradient is the contact force, its Hessian the
-//!   consistent tangent (symmetric), both exact: the penetration is written
-//!   once, generic over dual numbers, and differentiated by `num-dual`.
-//!   Between Newton solves, [`ParticleContact::augment`] updates the
-//!   multipliers (Uzawa) until the penetration is below its tolerance.
+//!   the tributary area so that identical particles are treated alike), on
+//!   bilinear quad facets, by an augmented Lagrangian: the energy of a slave
+//!   node of tributary area `A` is `A / (4 eps) <lambda + eps p>^2` (half of
+//!   `A / (2 eps) <.>^2` per pass) with `p` its penetration into the facet,
+//!   `lambda` its contact pressure multiplier and `<x> = max(x, 0)`. Its
+//!   gradient is the contact force, its Hessian the consistent tangent
+//!   (symmetric), both exact: the penetration is written once, generic over
+//!   dual numbers, and differentiated by `num-dual`. Between Newton solves,
+//!   [`ParticleContact::augment`] updates the multipliers (Uzawa) until the
+//!   penetration is below its tolerance.
+//! - within a step each node keeps the facet it was paired with at the
+//!   step's start ([`ParticleContact::pair`]), so the residual stays smooth
+//!   while Newton iterates.
 
 mod error;
 mod gap;
 mod surface;
 
 pub use error::ContactError;
-pub use gap::{penetration, tie_gap};
+pub use gap::{penetration, project, shape, tie_gap};
 pub use surface::ContactSurface;
 
 use nalgebra::{SMatrix, SVector};
-use num_dual::{Dual2SVec64, hessian};
+use num_dual::{Dual2SVec64, DualSVec64, hessian};
 use parry3d_f64::math::Vector as PVector;
 use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::TriMesh;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+
+/// Dofs of one contact term: a slave node and the four nodes of a facet.
+pub const TERM_DOFS: usize = 15;
 
 /// How closed contacts behave.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -54,39 +62,38 @@ pub struct ContactSettings {
     pub search_distance: f64,
 }
 
-/// One slave node's link to a master triangle, with its contribution.
+/// One slave node's link to a master facet, with its contribution.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ContactTerm {
-    /// Body dofs: the slave node's three, then the master triangle's nine.
-    pub dofs: [usize; 12],
+    /// Body dofs: the slave node's three, then the facet nodes' twelve.
+    pub dofs: [usize; TERM_DOFS],
     /// Contribution to the internal force [N].
-    pub force: [f64; 12],
-    /// Consistent tangent, row-major 12x12 [N/mm] (empty if not requested).
+    pub force: [f64; TERM_DOFS],
+    /// Consistent tangent, row-major 15x15 [N/mm] (empty if not requested).
     pub tangent: Vec<f64>,
-    /// Contact pressure at the slave node [MPa].
+    /// Contact pressure (tied: traction magnitude) at the slave node [MPa].
     pub pressure: f64,
-    /// Penetration of the slave node (negative: a gap) [mm].
+    /// Penetration of the slave node (negative: a gap; tied: gap length) [mm].
     pub penetration: f64,
     /// Slave surface and index of the node in it.
     pub slave: (usize, usize),
-    /// Master surface and triangle.
+    /// Master surface and facet.
     pub master: (usize, usize),
-    /// Barycentric coordinates of the slave's projection on the master
-    /// triangle's plane.
-    pub location: [f64; 3],
+    /// Facet parameters (xi, eta) of the slave's projection.
+    pub location: [f64; 2],
 }
 
 /// Saved multiplier state: per surface, per node (lambda, tie, tie lambda).
-pub type StateSnapshot = Vec<Vec<(f64, Option<(usize, usize, [f64; 3])>, [f64; 3])>>;
+pub type StateSnapshot = Vec<Vec<(f64, Option<(usize, usize, [f64; 2])>, [f64; 3])>>;
 
 /// Multiplier state of one slave node of one pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 struct NodeState {
     /// Normal pressure multiplier [MPa] (frictionless).
     lambda: f64,
-    /// Tied: the master surface, triangle and barycentric point, and the
-    /// vector multiplier [MPa].
-    tie: Option<(usize, usize, [f64; 3])>,
+    /// Tied: the master surface, facet and parameters, and the vector
+    /// multiplier [MPa].
+    tie: Option<(usize, usize, [f64; 2])>,
     tie_lambda: [f64; 3],
 }
 
@@ -97,8 +104,8 @@ pub struct ParticleContact {
     settings: ContactSettings,
     /// Per surface, per node: the state of its pass as slave.
     state: Vec<Vec<NodeState>>,
-    /// Per surface, per node: the master (surface, triangle) it is paired
-    /// with for the current step (see [`ParticleContact::pair`]).
+    /// Per surface, per node: the master (surface, facet) it is paired with
+    /// for the current step (see [`ParticleContact::pair`]).
     #[serde(skip)]
     pairing: Vec<Vec<Option<(usize, usize)>>>,
 }
@@ -110,7 +117,8 @@ pub struct ContactEvaluation {
 }
 
 impl ContactEvaluation {
-    /// Largest penetration of any slave node into a master surface [mm].
+    /// Largest penetration of any slave node into a master surface [mm]
+    /// (frictionless terms; tied terms report their gap length).
     pub fn max_penetration(&self) -> f64 {
         self.terms.iter().map(|t| t.penetration).fold(0.0, f64::max)
     }
@@ -170,12 +178,8 @@ impl ParticleContact {
         let mut pairs = Vec::new();
         for i in 0..boxes.len() {
             for j in 0..boxes.len() {
-                if i == j {
-                    continue;
-                }
                 let (a, b) = (&boxes[i], &boxes[j]);
-                let overlap = (0..3).all(|k| a.0[k] - d <= b.1[k] && b.0[k] - d <= a.1[k]);
-                if overlap {
+                if i != j && (0..3).all(|k| a.0[k] - d <= b.1[k] && b.0[k] - d <= a.1[k]) {
                     pairs.push((i, j));
                 }
             }
@@ -183,53 +187,37 @@ impl ParticleContact {
         pairs
     }
 
-    /// Pairs every slave node with the master triangle nearest to it in the
-    /// configuration `x` (within the search distance), for the coming step.
-    /// Within a step a paired node keeps its triangle (its gap is measured to
-    /// the triangle's plane), so the residual stays smooth while Newton
-    /// iterates: switching facets between iterations would make it jump.
-    pub fn pair(&mut self, x: &[f64]) {
-        let pairs = self.candidate_pairs(x);
+    /// The search meshes of the master surfaces of `pairs` whose slave
+    /// surface satisfies `needs`.
+    fn search_meshes(
+        &self,
+        x: &[f64],
+        pairs: &[(usize, usize)],
+        needs: impl Fn(usize) -> bool,
+    ) -> Vec<Option<TriMesh>> {
         let mut meshes: Vec<Option<TriMesh>> = vec![None; self.surfaces.len()];
-        for &(_, m) in &pairs {
-            if meshes[m].is_none() {
+        for &(s, m) in pairs {
+            if meshes[m].is_none() && needs(s) {
                 meshes[m] = self.surfaces[m].trimesh(x);
             }
         }
-        let mut best: Vec<Vec<Option<(usize, usize, f64)>>> = self
-            .surfaces
-            .iter()
-            .map(|s| vec![None; s.nodes.len()])
-            .collect();
-        for &(s, m) in &pairs {
-            let Some(mesh) = meshes[m].as_ref() else {
-                continue;
-            };
-            let found: Vec<Option<(usize, f64)>> = (0..self.surfaces[s].nodes.len())
-                .into_par_iter()
-                .map(|k| self.nearest(x, s, k, mesh))
-                .collect();
-            for (k, f) in found.into_iter().enumerate() {
-                if let Some((tri, dist)) = f
-                    && best[s][k].is_none_or(|(_, _, d)| dist < d)
-                {
-                    best[s][k] = Some((m, tri, dist));
-                }
-            }
-        }
-        self.pairing = best
-            .into_iter()
-            .map(|v| {
-                v.into_iter()
-                    .map(|b| b.map(|(m, tri, _)| (m, tri)))
-                    .collect()
-            })
-            .collect();
+        meshes
     }
 
-    /// The triangle of `mesh` nearest to slave node `k` of surface `s`, and
-    /// its distance, within the search distance.
-    fn nearest(&self, x: &[f64], s: usize, k: usize, mesh: &TriMesh) -> Option<(usize, f64)> {
+    /// The facet of surface `m` nearest to slave node `k` of surface `s`
+    /// within the search distance, and its distance. Parry finds the nearest
+    /// triangle; among the quads around its quad, the one whose bilinear
+    /// projection lies deepest inside it is chosen: a geometric rule that
+    /// mirror-symmetric meshes follow alike, so a node on an edge between
+    /// two facets is not left to the order of a tree traversal.
+    fn nearest(
+        &self,
+        x: &[f64],
+        s: usize,
+        k: usize,
+        m: usize,
+        mesh: &TriMesh,
+    ) -> Option<(usize, f64)> {
         let p = point(x, self.surfaces[s].nodes[k]);
         let q = PVector::new(p[0], p[1], p[2]);
         let (proj, (tri, _)) = mesh.project_local_point_and_get_location_with_max_dist(
@@ -237,33 +225,78 @@ impl ParticleContact {
             false,
             self.settings.search_distance,
         )?;
-        Some((tri as usize, (proj.point - q).length()))
+        let master = &self.surfaces[m];
+        let outside = |facet: usize| {
+            let xi = project(&p, &master.quads[facet].map(|n| point(x, n)));
+            xi[0].abs().max(xi[1].abs())
+        };
+        let best = master
+            .ring(tri as usize / 2)
+            .iter()
+            .map(|&f| (f, outside(f)))
+            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+            .map_or(tri as usize / 2, |(f, _)| f);
+        Some((best, (proj.point - q).length()))
     }
 
-    /// Contact terms at the configuration `x` (current node coordinates,
-    /// `3 * node + i`), with tangents if asked. A paired node uses its
-    /// triangle; an unpaired one is searched for on every surface whose box
-    /// meets its own, and takes the nearest triangle.
-    pub fn evaluate(&self, x: &[f64], with_tangent: bool) -> ContactEvaluation {
+    /// The nearest facet over the candidate masters of slave surface `s`.
+    fn nearest_over(
+        &self,
+        x: &[f64],
+        s: usize,
+        k: usize,
+        masters: &[usize],
+        meshes: &[Option<TriMesh>],
+    ) -> Option<(usize, usize)> {
+        masters
+            .iter()
+            .filter_map(|&m| {
+                let (facet, d) = self.nearest(x, s, k, m, meshes[m].as_ref()?)?;
+                Some((m, facet, d))
+            })
+            .min_by(|a, b| a.2.total_cmp(&b.2))
+            .map(|(m, facet, _)| (m, facet))
+    }
+
+    /// Pairs every slave node with the master facet nearest to it in the
+    /// configuration `x` (within the search distance), for the coming step.
+    /// Within a step a paired node keeps its facet (its penetration measured
+    /// on the facet's bilinear patch, extended beyond its edges if need be),
+    /// so the residual stays smooth while Newton iterates: switching facets
+    /// between iterations would make it jump.
+    pub fn pair(&mut self, x: &[f64]) {
         let pairs = self.candidate_pairs(x);
+        let meshes = self.search_meshes(x, &pairs, |_| true);
         let mut masters: Vec<Vec<usize>> = vec![Vec::new(); self.surfaces.len()];
         for &(s, m) in &pairs {
             masters[s].push(m);
         }
+        self.pairing = (0..self.surfaces.len())
+            .map(|s| {
+                (0..self.surfaces[s].nodes.len())
+                    .into_par_iter()
+                    .map(|k| self.nearest_over(x, s, k, &masters[s], &meshes))
+                    .collect()
+            })
+            .collect();
+    }
+
+    /// Contact terms at the configuration `x` (current node coordinates,
+    /// `3 * node + i`), with tangents if asked. A paired node uses its facet;
+    /// an unpaired one is searched for on every surface whose box meets its
+    /// own, and takes the nearest facet.
+    pub fn evaluate(&self, x: &[f64], with_tangent: bool) -> ContactEvaluation {
+        let pairs = self.candidate_pairs(x);
         let paired = |s: usize, k: usize| {
             self.pairing
                 .get(s)
                 .and_then(|v| v.get(k).copied().flatten())
         };
-        let mut meshes: Vec<Option<TriMesh>> = vec![None; self.surfaces.len()];
-        for (s, ms) in masters.iter().enumerate() {
-            if (0..self.surfaces[s].nodes.len()).any(|k| paired(s, k).is_none()) {
-                for &m in ms {
-                    if meshes[m].is_none() {
-                        meshes[m] = self.surfaces[m].trimesh(x);
-                    }
-                }
-            }
+        let unpaired = |s: usize| (0..self.surfaces[s].nodes.len()).any(|k| paired(s, k).is_none());
+        let meshes = self.search_meshes(x, &pairs, unpaired);
+        let mut masters: Vec<Vec<usize>> = vec![Vec::new(); self.surfaces.len()];
+        for &(s, m) in &pairs {
+            masters[s].push(m);
         }
         let work: Vec<(usize, usize)> = self
             .surfaces
@@ -271,40 +304,54 @@ impl ParticleContact {
             .enumerate()
             .flat_map(|(s, surface)| (0..surface.nodes.len()).map(move |k| (s, k)))
             .collect();
-        let terms: Vec<ContactTerm> = work
+        let terms = work
             .par_iter()
             .filter_map(|&(s, k)| {
                 let st = &self.state[s][k];
-                if let Some((m, tri, bary)) = st.tie {
+                if let Some((m, facet, xi)) = st.tie {
                     return Some(self.tied_term(
                         x,
                         s,
                         k,
                         m,
-                        tri,
-                        bary,
+                        facet,
+                        xi,
                         st.tie_lambda,
                         with_tangent,
                     ));
                 }
-                let (m, tri) = match paired(s, k) {
+                let (m, facet) = match paired(s, k) {
                     Some(p) => p,
-                    None => masters[s]
-                        .iter()
-                        .filter_map(|&m| {
-                            let (tri, d) = self.nearest(x, s, k, meshes[m].as_ref()?)?;
-                            Some((m, tri, d))
-                        })
-                        .min_by(|a, b| a.2.total_cmp(&b.2))
-                        .map(|(m, tri, _)| (m, tri))?,
+                    None => self.nearest_over(x, s, k, &masters[s], &meshes)?,
                 };
-                self.node_term(x, s, k, m, tri, with_tangent)
+                self.node_term(x, s, k, m, facet, with_tangent)
             })
             .collect();
         ContactEvaluation { terms }
     }
 
-    /// The term of slave node `k` of surface `s` against triangle `tri` of
+    /// Slave point, facet node coordinates, and the term's dofs.
+    fn gather(
+        &self,
+        x: &[f64],
+        s: usize,
+        k: usize,
+        m: usize,
+        facet: usize,
+    ) -> ([f64; 3], [[f64; 3]; 4], [usize; TERM_DOFS]) {
+        let node = self.surfaces[s].nodes[k];
+        let quad = self.surfaces[m].quads[facet];
+        let mut dofs = [0; TERM_DOFS];
+        for i in 0..3 {
+            dofs[i] = 3 * node + i;
+            for a in 0..4 {
+                dofs[3 + 3 * a + i] = 3 * quad[a] + i;
+            }
+        }
+        (point(x, node), quad.map(|n| point(x, n)), dofs)
+    }
+
+    /// The term of slave node `k` of surface `s` against facet `facet` of
     /// master surface `m`, if the node presses on it or nearly touches it.
     fn node_term(
         &self,
@@ -312,33 +359,31 @@ impl ParticleContact {
         s: usize,
         k: usize,
         m: usize,
-        tri: usize,
+        facet: usize,
         with_tangent: bool,
     ) -> Option<ContactTerm> {
-        let st = &self.state[s][k];
-        let node = self.surfaces[s].nodes[k];
-        let p = point(x, node);
-        let t = self.surfaces[m].triangles[tri];
-        let mut v = SVector::<f64, 12>::zeros();
-        for i in 0..3 {
-            v[i] = p[i];
-        }
-        for (c, &n) in t.iter().enumerate() {
-            let q = point(x, n);
-            for i in 0..3 {
-                v[3 + 3 * c + i] = q[i];
-            }
+        let (p, q, dofs) = self.gather(x, s, k, m, facet);
+        let xi = project(&p, &q);
+        let mut v = SVector::<f64, TERM_DOFS>::zeros();
+        for (j, d) in dofs.iter().enumerate() {
+            v[j] = x[*d];
         }
         let area = 0.5 * self.surfaces[s].areas[k];
         let eps = self.settings.penalty;
         let (pen, grad, hess) = if with_tangent {
-            let (f, g, h) = hessian(|w: SVector<Dual2SVec64<12>, 12>| penetration(&w), &v);
+            let (f, g, h) = hessian(
+                |w: SVector<Dual2SVec64<TERM_DOFS>, TERM_DOFS>| penetration(&w, xi),
+                &v,
+            );
             (f, g, Some(h))
         } else {
-            let (f, g) = gradient_of_penetration(&v);
+            let (f, g) = num_dual::gradient(
+                |w: SVector<DualSVec64<TERM_DOFS>, TERM_DOFS>| penetration(&w, xi),
+                &v,
+            );
             (f, g, None)
         };
-        let pressure = (st.lambda + eps * pen).max(0.0);
+        let pressure = (self.state[s][k].lambda + eps * pen).max(0.0);
         // A node near the surface without pressure (a gap below a tenth of
         // the search distance) still brings a thousandth of the penalty
         // stiffness to the tangent (not to the force), so that a body held
@@ -349,27 +394,19 @@ impl ParticleContact {
         if pressure <= 0.0 && !touching {
             return None;
         }
-        let mut dofs = [0; 12];
-        for i in 0..3 {
-            dofs[i] = 3 * node + i;
-            for c in 0..3 {
-                dofs[3 + 3 * c + i] = 3 * t[c] + i;
-            }
-        }
-        let mut force = [0.0; 12];
+        let mut force = [0.0; TERM_DOFS];
         for (f, g) in force.iter_mut().zip(grad.iter()) {
             *f = area * pressure * g;
         }
         let tangent = match hess {
             Some(h) => {
                 let stiffness = if pressure > 0.0 { eps } else { 1e-3 * eps };
-                let k: SMatrix<f64, 12, 12> =
+                let k: SMatrix<f64, TERM_DOFS, TERM_DOFS> =
                     (grad * grad.transpose()) * (area * stiffness) + h * (area * pressure);
                 k.transpose().as_slice().to_vec()
             }
             None => Vec::new(),
         };
-        let location = gap::barycentric(&p, &t.map(|n| point(x, n)));
         Some(ContactTerm {
             dofs,
             force,
@@ -377,13 +414,13 @@ impl ParticleContact {
             pressure,
             penetration: pen,
             slave: (s, k),
-            master: (m, tri),
-            location,
+            master: (m, facet),
+            location: xi,
         })
     }
 
     /// Term of a tied slave node: a vector penalty on the distance to its
-    /// material point on the master triangle.
+    /// material point on the master facet.
     #[allow(clippy::too_many_arguments)]
     fn tied_term(
         &self,
@@ -391,38 +428,32 @@ impl ParticleContact {
         s: usize,
         k: usize,
         m: usize,
-        tri: usize,
-        bary: [f64; 3],
+        facet: usize,
+        xi: [f64; 2],
         lambda: [f64; 3],
         with_tangent: bool,
     ) -> ContactTerm {
-        let node = self.surfaces[s].nodes[k];
-        let t = self.surfaces[m].triangles[tri];
+        let (p, q, dofs) = self.gather(x, s, k, m, facet);
         let area = 0.5 * self.surfaces[s].areas[k];
         let eps = self.settings.penalty;
-        let gap = tie_gap(&point(x, node), &t.map(|n| point(x, n)), &bary);
-        let mut dofs = [0; 12];
-        // d gap_i / d u: +1 for the slave, -N_c for master node c.
-        let weights = [1.0, -bary[0], -bary[1], -bary[2]];
-        for i in 0..3 {
-            dofs[i] = 3 * node + i;
-            for c in 0..3 {
-                dofs[3 + 3 * c + i] = 3 * t[c] + i;
-            }
-        }
+        let gap = tie_gap(&p, &q, xi);
+        let n = shape(xi);
+        // d gap / d x: +1 for the slave, -N_a for facet node a.
+        let weights = [1.0, -n[0], -n[1], -n[2], -n[3]];
         let traction: [f64; 3] = [0, 1, 2].map(|i| lambda[i] + eps * gap[i]);
-        let mut force = [0.0; 12];
-        for a in 0..4 {
+        let mut force = [0.0; TERM_DOFS];
+        for a in 0..5 {
             for i in 0..3 {
                 force[3 * a + i] = area * traction[i] * weights[a];
             }
         }
         let tangent = if with_tangent {
-            let mut kmat = vec![0.0; 144];
-            for a in 0..4 {
-                for b in 0..4 {
+            let mut kmat = vec![0.0; TERM_DOFS * TERM_DOFS];
+            for a in 0..5 {
+                for b in 0..5 {
                     for i in 0..3 {
-                        kmat[(3 * a + i) * 12 + 3 * b + i] = area * eps * weights[a] * weights[b];
+                        kmat[(3 * a + i) * TERM_DOFS + 3 * b + i] =
+                            area * eps * weights[a] * weights[b];
                     }
                 }
             }
@@ -430,42 +461,41 @@ impl ParticleContact {
         } else {
             Vec::new()
         };
-        let norm = (gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2]).sqrt();
+        let length = (gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2]).sqrt();
         ContactTerm {
             dofs,
             force,
             tangent,
             pressure: traction.iter().map(|v| v * v).sum::<f64>().sqrt(),
-            penetration: norm,
+            penetration: length,
             slave: (s, k),
-            master: (m, tri),
-            location: bary,
+            master: (m, facet),
+            location: xi,
         }
     }
 
     /// Uzawa update after a converged solve: the multipliers take the
-    /// pressures of `eval` (and slave nodes not in it lose theirs). In tied
-    /// mode, nodes in contact become tied to where they touch. Returns the
-    /// largest penetration before the update [mm].
+    /// pressures of `eval` (slave nodes not in it lose theirs); tied nodes
+    /// add their gap times the penalty. Returns the largest penetration
+    /// before the update [mm].
     pub fn augment(&mut self, x: &[f64], eval: &ContactEvaluation) -> f64 {
         let eps = self.settings.penalty;
-        let mut active = vec![Vec::<bool>::new(); self.surfaces.len()];
-        for (s, a) in active.iter_mut().enumerate() {
-            *a = vec![false; self.surfaces[s].nodes.len()];
-        }
+        let mut active: Vec<Vec<bool>> = self
+            .surfaces
+            .iter()
+            .map(|s| vec![false; s.nodes.len()])
+            .collect();
         for t in &eval.terms {
             let (s, k) = t.slave;
             active[s][k] = true;
-            let st = &mut self.state[s][k];
-            if let Some((m, tri, bary)) = st.tie {
-                let node = self.surfaces[s].nodes[k];
-                let tr = self.surfaces[m].triangles[tri];
-                let gap = tie_gap(&point(x, node), &tr.map(|n| point(x, n)), &bary);
+            if let Some((m, facet, xi)) = self.state[s][k].tie {
+                let (p, q, _) = self.gather(x, s, k, m, facet);
+                let gap = tie_gap(&p, &q, xi);
                 for i in 0..3 {
-                    st.tie_lambda[i] += eps * gap[i];
+                    self.state[s][k].tie_lambda[i] += eps * gap[i];
                 }
             } else {
-                st.lambda = t.pressure;
+                self.state[s][k].lambda = t.pressure;
             }
         }
         for (s, states) in self.state.iter_mut().enumerate() {
@@ -478,25 +508,24 @@ impl ParticleContact {
         eval.max_penetration()
     }
 
-    /// Tied mode: makes every slave node now in contact tied to the material
-    /// point of the master triangle it touches (call once per converged step).
+    /// Tied mode: makes every slave node now pressed into a facet tied to
+    /// the material point of the facet it touches (call once per converged
+    /// step).
     pub fn tie_closed(&mut self, eval: &ContactEvaluation) {
         if self.settings.mode != ContactMode::Tied {
             return;
         }
         for t in &eval.terms {
             let (s, k) = t.slave;
-            if self.state[s][k].tie.is_some() || t.penetration < 0.0 {
-                continue;
-            }
             let st = &mut self.state[s][k];
-            st.tie = Some((t.master.0, t.master.1, t.location));
-            st.tie_lambda = [0.0; 3];
+            if st.tie.is_none() && t.pressure > 0.0 {
+                st.tie = Some((t.master.0, t.master.1, t.location));
+                st.tie_lambda = [0.0; 3];
+            }
         }
     }
 
-    /// Serialisable copy of the multiplier state (to save and restore
-    /// around a step that may be cut back).
+    /// Copy of the multiplier state, to redo a step from.
     pub fn state_snapshot(&self) -> StateSnapshot {
         self.state
             .iter()
@@ -515,14 +544,4 @@ impl ParticleContact {
             }
         }
     }
-}
-
-/// Value and gradient of the penetration (first-order duals would do; the
-/// Hessian path is reused for simplicity of one code path).
-fn gradient_of_penetration(v: &SVector<f64, 12>) -> (f64, SVector<f64, 12>) {
-    let (f, g) = num_dual::gradient(
-        |w: SVector<num_dual::DualSVec64<12>, 12>| penetration(&w),
-        v,
-    );
-    (f, g)
 }

@@ -1,5 +1,5 @@
-//! A particle's contact surface: its nodes, their tributary areas and its
-//! triangles (each boundary quad split in two, outward right-hand normals).
+//! A particle's contact surface: its nodes, their tributary areas, its
+//! bilinear quad facets, and the triangles parry searches (two per quad).
 
 use crate::error::ContactError;
 use parry3d_f64::math::Vector as PVector;
@@ -13,10 +13,14 @@ pub struct ContactSurface {
     pub nodes: Vec<usize>,
     /// Tributary area of each surface node in the reference state [mm^2].
     pub areas: Vec<f64>,
-    /// Triangles by global node id (outward right-hand normal).
-    pub triangles: Vec<[usize; 3]>,
-    /// Triangles by index into `nodes` (for the parry mesh).
-    local: Vec<[u32; 3]>,
+    /// Quad facets by global node id (counter-clockwise about the outward
+    /// normal).
+    pub quads: Vec<[usize; 4]>,
+    /// Triangles for the search, by index into `nodes`: triangles `2 q` and
+    /// `2 q + 1` cover quad `q`.
+    triangles: Vec<[u32; 3]>,
+    /// The quads around each quad (sharing a node with it, itself included).
+    ring: Vec<Vec<usize>>,
 }
 
 impl ContactSurface {
@@ -34,24 +38,48 @@ impl ContactSurface {
         let index = |n: usize| nodes.binary_search(&n).unwrap_or(0);
         let mut areas = vec![0.0; nodes.len()];
         let mut triangles = Vec::with_capacity(2 * quads.len());
-        let mut local = Vec::with_capacity(2 * quads.len());
         for q in quads {
+            // Half the cross product of the diagonals: the area of the quad,
+            // the same whichever diagonal splits it; a quarter to each node.
+            let p = q.map(|n| nodes0[n]);
+            let area = 0.5 * norm(&cross(&sub(&p[2], &p[0]), &sub(&p[3], &p[1])));
+            for &n in q {
+                areas[index(n)] += 0.25 * area;
+            }
             for t in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
-                let p = t.map(|n| nodes0[n]);
-                let area = 0.5 * norm(&cross(&sub(&p[1], &p[0]), &sub(&p[2], &p[0])));
-                for &n in &t {
-                    areas[index(n)] += area / 3.0;
-                }
-                triangles.push(t);
-                local.push(t.map(|n| index(n) as u32));
+                triangles.push(t.map(|n| index(n) as u32));
             }
         }
+        let mut around: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
+        for (qi, q) in quads.iter().enumerate() {
+            for &n in q {
+                around[index(n)].push(qi);
+            }
+        }
+        let ring = quads
+            .iter()
+            .map(|q| {
+                let mut r: Vec<usize> = q
+                    .iter()
+                    .flat_map(|&n| around[index(n)].iter().copied())
+                    .collect();
+                r.sort_unstable();
+                r.dedup();
+                r
+            })
+            .collect();
         Ok(Self {
             nodes,
             areas,
+            quads: quads.to_vec(),
             triangles,
-            local,
+            ring,
         })
+    }
+
+    /// The quads sharing a node with quad `q` (itself included).
+    pub fn ring(&self, q: usize) -> &[usize] {
+        &self.ring[q]
     }
 
     /// Axis-aligned bounding box in the configuration `x` [mm].
@@ -67,14 +95,15 @@ impl ContactSurface {
         (lo, hi)
     }
 
-    /// The surface as a parry `TriMesh` in the configuration `x`.
+    /// The surface as a parry `TriMesh` in the configuration `x`; triangle
+    /// `t` lies on quad `t / 2`.
     pub fn trimesh(&self, x: &[f64]) -> Option<TriMesh> {
         let vertices = self
             .nodes
             .iter()
             .map(|&n| PVector::new(x[3 * n], x[3 * n + 1], x[3 * n + 2]))
             .collect();
-        TriMesh::new(vertices, self.local.clone()).ok()
+        TriMesh::new(vertices, self.triangles.clone()).ok()
     }
 }
 

@@ -6,7 +6,10 @@ use tidens_contact::{ContactMode, ContactSettings, ContactSurface, ParticleConta
 
 /// Two 3x3-quad patches: a dome bulging up (outward normal +z), a dome
 /// bulging down above it (outward normal -z), overlapping by `overlap`.
-fn patches(overlap: f64) -> (Vec<[f64; 3]>, Vec<[usize; 4]>, Vec<[usize; 4]>) {
+/// Nodes, and the quads of the lower and of the upper patch.
+type Patches = (Vec<[f64; 3]>, Vec<[usize; 4]>, Vec<[usize; 4]>);
+
+fn patches(overlap: f64) -> Patches {
     let mut nodes = Vec::new();
     let n = 4;
     for (sheet, z0, sign) in [(0, 0.0, 1.0), (1, 0.0, -1.0)] {
@@ -82,9 +85,10 @@ fn contact_tangent_equals_finite_differences_of_the_force() {
     // Nodes near but not in contact carry stiffness without force (the
     // predictive part of the tangent): leave them out of the comparison.
     for t in eval.terms.iter().filter(|t| t.pressure > 0.0) {
-        for p in 0..12 {
-            for q in 0..12 {
-                k[t.dofs[p] * n + t.dofs[q]] += t.tangent[p * 12 + q];
+        let m = t.dofs.len();
+        for p in 0..m {
+            for q in 0..m {
+                k[t.dofs[p] * n + t.dofs[q]] += t.tangent[p * m + q];
             }
         }
     }

@@ -320,6 +320,12 @@ impl Simulation {
         s
     }
 
+    /// The particle-contact terms of the last converged step (one per slave
+    /// node in contact or about to touch).
+    pub fn contact_terms(&self) -> &[tidens_contact::ContactTerm] {
+        &self.contact_eval.terms
+    }
+
     /// Per particle: the total force the other particles exert on it through
     /// contact, and the total force the rigid planes exert on it, at the last
     /// converged step [N]. For each particle the two balance (to the Newton

@@ -1,0 +1,259 @@
+//! Particle-particle contact (issue: contact between particles, every cell).
+
+use tidens_solver::{
+    Cell, ContactMode, LoadHistory, MeshOptions, Octant, Preset, Scene, Settings, Simulation,
+    Status,
+};
+
+fn press(cell: &Cell, level: u32, until_density: f64, mode: ContactMode) -> (Scene, Simulation) {
+    let scene = Scene::from_cell(
+        cell,
+        &MeshOptions {
+            level,
+            grading: 1.0,
+        },
+    )
+    .unwrap();
+    let mut settings = Settings::new(LoadHistory {
+        stress: 15.0,
+        knockdown: 1.0,
+        ramp_time: 1.0,
+    });
+    settings.until_density = Some(until_density);
+    settings.tolerance = 0.05;
+    settings.contact.mode = mode;
+    let sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
+    (scene, sim)
+}
+
+/// Two octants stacked along z touching at their poles: the sc cell doubled
+/// along the load. Their contact plane is the mirror plane of the sc cell.
+fn stacked_pair(radius: f64) -> Cell {
+    let oct = |top| Octant {
+        corner: [false, false, top],
+        a: radius,
+        c: radius,
+    };
+    Cell::new(
+        "stacked pair",
+        [radius, radius, 2.0 * radius],
+        vec![oct(false), oct(true)],
+    )
+    .unwrap()
+}
+
+/// Two identical octants pressed together along an axis deform
+/// mirror-symmetrically, their contact surface stays a plane (the mid-plane
+/// of the cell), and the pair densifies like the sc cell whose mirror plane
+/// that contact replaces.
+#[test]
+fn identical_octants_pressed_along_an_axis_deform_mirror_symmetrically() {
+    let r = 0.05;
+    let level: u32 = std::env::var("PAIR_LEVEL").map_or(1, |v| v.parse().unwrap());
+    let (scene, mut pair) = press(&stacked_pair(r), level, 0.62, ContactMode::Frictionless);
+    let mut worst_pen: f64 = 0.0;
+    let status = pair
+        .run(|p| {
+            worst_pen = worst_pen.max(p.max_penetration);
+            true
+        })
+        .unwrap();
+    assert_eq!(status, Status::ReachedDensity);
+    assert!(worst_pen < 1e-4 * r, "penetration {worst_pen:e} mm");
+    let f = pair.fields();
+    let lz = scene.lengths[2] + pair.curve().last().unwrap().piston_displacement;
+    let (bottom, top) = (&scene.particles[0], &scene.particles[1]);
+    // Node k of the top particle is the mirror image of node k of the bottom one.
+    let mut asym: f64 = 0.0;
+    for k in 0..bottom.nodes.1 {
+        let (p, q) = (f.points[bottom.nodes.0 + k], f.points[top.nodes.0 + k]);
+        asym = asym
+            .max((p[0] - q[0]).abs())
+            .max((p[1] - q[1]).abs())
+            .max((p[2] + q[2] - lz).abs());
+    }
+    assert!(asym < 2e-3 * r, "mirror asymmetry {asym:e} mm");
+    // Nodes in contact lie on the mid-plane.
+    let mid = 0.5 * lz;
+    let mut flat: f64 = 0.0;
+    let mut pressed = 0;
+    for t in pair.contact_terms().iter().filter(|t| t.pressure > 0.0) {
+        flat = flat.max((f.points[t.dofs[0] / 3][2] - mid).abs());
+        pressed += 1;
+    }
+    assert!(pressed >= 4, "only {pressed} nodes in contact");
+    assert!(
+        flat < 2e-3 * r,
+        "contact surface off the mid-plane by {flat:e} mm"
+    );
+    // Against the sc cell on the same mesh: the contact replaces its mirror plane.
+    let (_, mut sc) = press(
+        &Cell::sc(r, 1.0).unwrap(),
+        1,
+        0.62,
+        ContactMode::Frictionless,
+    );
+    sc.run(|_| true).unwrap();
+    let t_at = |sim: &Simulation, rho: f64| {
+        let c = sim.curve();
+        let k = c.iter().position(|p| p.rel_density >= rho).unwrap();
+        let (a, b) = (&c[k - 1], &c[k]);
+        a.time + (rho - a.rel_density) / (b.rel_density - a.rel_density) * (b.time - a.time)
+    };
+    let (tp, ts) = (t_at(&pair, 0.6), t_at(&sc, 0.6));
+    assert!(
+        (tp / ts - 1.0).abs() < 0.05,
+        "t(0.6): pair {tp:.3} s, sc {ts:.3} s"
+    );
+}
+
+/// The force through the contact balances the piston force at every
+/// converged step (bcc: the top particle is pushed by the piston and held by
+/// the bottom one; the die walls take no vertical force), and every
+/// particle is in equilibrium under contact and plane forces.
+#[test]
+fn contact_force_balances_the_piston_force_at_every_step() {
+    let cell = Cell::bcc(0.05, 1.0).unwrap();
+    let (scene, mut sim) = press(&cell, 1, 0.72, ContactMode::Frictionless);
+    let area = scene.lengths[0] * scene.lengths[1];
+    let mut steps = 0;
+    let mut worst: f64 = 0.0;
+    while sim.status() == Status::Running {
+        let p = sim.advance().unwrap().clone();
+        let piston = p.cell_stress * area;
+        let forces = sim.particle_forces(&scene);
+        let (contact, planes) = forces[1];
+        worst = worst.max((contact[2] - piston).abs() / piston);
+        for (c, pl) in &forces {
+            for i in 0..3 {
+                assert!(
+                    (c[i] + pl[i]).abs() <= 1e-5 * piston,
+                    "particle out of equilibrium"
+                );
+            }
+        }
+        // The piston is the only vertical plane force on the top particle.
+        assert!((planes[2] + piston).abs() <= 1e-5 * piston);
+        steps += 1;
+    }
+    assert!(steps > 10);
+    assert!(
+        worst < 1e-5,
+        "contact force off the piston force by {worst:e} (relative)"
+    );
+    assert_eq!(sim.status(), Status::ReachedDensity);
+}
+
+/// fcc: the four octants are equivalent by symmetry, so their plastic
+/// strain agrees; sc-2: the small particles deform more than the large ones.
+#[test]
+fn plastic_strain_follows_the_symmetry_and_the_sizes() {
+    let mean_eqps = |scene: &Scene, sim: &Simulation| -> Vec<(f64, f64)> {
+        let f = sim.fields();
+        scene
+            .particles
+            .iter()
+            .map(|p| {
+                let e = &f.element.eqps[p.elements.0..p.elements.0 + p.elements.1];
+                let mean = e.iter().sum::<f64>() / e.len() as f64;
+                let max = e.iter().cloned().fold(0.0, f64::max);
+                (mean, max)
+            })
+            .collect()
+    };
+    let (scene, mut fcc) = press(
+        &Cell::fcc(0.05, 1.0).unwrap(),
+        1,
+        0.8,
+        ContactMode::Frictionless,
+    );
+    fcc.run(|_| true).unwrap();
+    let e = mean_eqps(&scene, &fcc);
+    let (lo, hi) = e.iter().fold((f64::INFINITY, 0.0_f64), |(a, b), x| {
+        (a.min(x.0), b.max(x.0))
+    });
+    assert!(hi / lo - 1.0 < 0.03, "fcc mean plastic strains {e:?}");
+    let (scene, mut sc2) = press(
+        &Cell::sc2(0.05, 1.566, 1.0).unwrap(),
+        1,
+        0.65,
+        ContactMode::Frictionless,
+    );
+    sc2.run(|_| true).unwrap();
+    let e = mean_eqps(&scene, &sc2);
+    let cell = Cell::sc2(0.05, 1.566, 1.0).unwrap();
+    let (mut large, mut small) = (Vec::new(), Vec::new());
+    for (p, v) in scene.particles.iter().zip(&e) {
+        if cell.octants[p.octant].a > 0.04 {
+            large.push(v.0)
+        } else {
+            small.push(v.0)
+        }
+    }
+    let (l, s) = (
+        large.iter().cloned().fold(0.0, f64::max),
+        small.iter().cloned().fold(f64::INFINITY, f64::min),
+    );
+    assert!(
+        s > 1.2 * l,
+        "sc-2: smallest mean eqps of small particles {s:.4} vs largest of large {l:.4}"
+    );
+    // Particles of one size deform alike.
+    for group in [&large, &small] {
+        let (a, b) = group
+            .iter()
+            .fold((f64::INFINITY, 0.0_f64), |(a, b), x| (a.min(*x), b.max(*x)));
+        assert!(b / a - 1.0 < 0.05, "particles of one size: {group:?}");
+    }
+}
+
+/// Tied contact transmits shear, frictionless contact none: the force on a
+/// frictionless slave node is along the normal of its master facet.
+#[test]
+fn tied_contact_transmits_shear_and_frictionless_contact_none() {
+    let cell = Cell::bcc(0.05, 1.0).unwrap();
+    let tangential_ratio = |mode| {
+        let (_, mut sim) = press(&cell, 1, 0.74, mode);
+        sim.run(|_| true).unwrap();
+        let f = sim.fields();
+        let mut worst: f64 = 0.0;
+        for t in sim.contact_terms().iter().filter(|t| t.pressure > 0.0) {
+            // Normal of the bilinear facet at the slave's projection.
+            let q = [1, 2, 3, 4].map(|c| f.points[t.dofs[3 * c] / 3]);
+            let [xi, eta] = t.location;
+            let corners = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+            let (mut dxi, mut deta) = ([0.0; 3], [0.0; 3]);
+            for (a, c) in corners.iter().enumerate() {
+                for i in 0..3 {
+                    dxi[i] += 0.25 * c[0] * (1.0 + c[1] * eta) * q[a][i];
+                    deta[i] += 0.25 * (1.0 + c[0] * xi) * c[1] * q[a][i];
+                }
+            }
+            let n = cross(dxi, deta);
+            let nn = dot(n, n).sqrt();
+            let force = [t.force[0], t.force[1], t.force[2]];
+            let fn_ = dot(force, n) / nn;
+            let ft = (dot(force, force) - fn_ * fn_).max(0.0).sqrt();
+            worst = worst.max(ft / dot(force, force).sqrt());
+        }
+        worst
+    };
+    let frictionless = tangential_ratio(ContactMode::Frictionless);
+    let tied = tangential_ratio(ContactMode::Tied);
+    assert!(
+        frictionless < 1e-6,
+        "frictionless contact carries shear: {frictionless:e}"
+    );
+    assert!(tied > 0.05, "tied contact carries no shear: {tied:e}");
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
