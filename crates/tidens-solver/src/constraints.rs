@@ -38,6 +38,10 @@ pub struct Constraints {
     rules: Vec<Rule>,
     /// For unilateral dofs: `Some(high)` while in contact with that plane.
     contact: Vec<Option<bool>>,
+    /// Sensitivity option: the tangential dofs of nodes in contact with a
+    /// rigid plane are held at the value they had when the contact closed.
+    tied_planes: bool,
+    ties: Vec<Option<f64>>,
     /// Active-set changes of each dof in the current step.
     flips: Vec<u8>,
     unilateral: Vec<usize>,
@@ -56,6 +60,7 @@ impl Constraints {
         mesh: &HexMesh,
         lengths: [f64; 3],
         lateral_walls: bool,
+        tied_planes: bool,
     ) -> Result<Self, SolverError> {
         let n_dof = 3 * mesh.nodes.len();
         let scale = lengths.iter().cloned().fold(0.0, f64::max);
@@ -111,6 +116,8 @@ impl Constraints {
             x0,
             rules,
             contact: vec![None; n_dof],
+            tied_planes,
+            ties: vec![None; n_dof],
             flips: vec![0; n_dof],
             unilateral,
         };
@@ -161,6 +168,7 @@ impl Constraints {
     pub fn equation_map(&self) -> Vec<usize> {
         (0..self.rules.len())
             .map(|d| match self.held_on(d) {
+                None if self.ties[d].is_some() => DOF_DROPPED,
                 None => d,
                 Some(true) if d % 3 == 2 => self.piston_equation(),
                 Some(_) => DOF_DROPPED,
@@ -209,6 +217,8 @@ impl Constraints {
         for d in 0..self.rules.len() {
             if let Some(high) = self.held_on(d) {
                 u[d] = self.plane_position(d % 3, high, piston) - self.x0[d];
+            } else if let Some(value) = self.ties[d] {
+                u[d] = value;
             }
         }
     }
@@ -289,6 +299,9 @@ impl Constraints {
                 }
             }
         }
+        if changes > 0 {
+            self.update_ties(u);
+        }
         changes
     }
 
@@ -310,13 +323,15 @@ impl Constraints {
         self.flips.fill(0);
     }
 
-    /// Contact state of the unilateral dofs, to save and restore around a step.
-    pub fn contact_state(&self) -> Vec<Option<bool>> {
-        self.contact.clone()
+    /// Contact state of the unilateral dofs (and ties), to save and restore
+    /// around a step.
+    pub fn contact_state(&self) -> (Vec<Option<bool>>, Vec<Option<f64>>) {
+        (self.contact.clone(), self.ties.clone())
     }
 
-    pub fn set_contact_state(&mut self, state: Vec<Option<bool>>) {
-        self.contact = state;
+    pub fn set_contact_state(&mut self, (contact, ties): (Vec<Option<bool>>, Vec<Option<f64>>)) {
+        self.contact = contact;
+        self.ties = ties;
     }
 
     /// Number of surface dofs in contact with each plane, indexed `2 axis + high`.
@@ -330,8 +345,29 @@ impl Constraints {
         c
     }
 
-    /// True for dofs held on a plane (bilateral or in contact).
+    /// True for dofs held on a plane (bilateral or in contact), or tied to
+    /// one.
     pub fn is_held(&self, d: usize) -> bool {
-        self.held_on(d).is_some()
+        self.held_on(d).is_some() || self.ties[d].is_some()
+    }
+
+    /// With tied planes: ties the free tangential dofs of every node in
+    /// contact with a plane where they are now, and frees those of nodes no
+    /// longer in contact.
+    fn update_ties(&mut self, u: &[f64]) {
+        if !self.tied_planes {
+            return;
+        }
+        for node in 0..self.rules.len() / 3 {
+            let touching = (0..3).any(|i| self.contact[3 * node + i].is_some());
+            for i in 0..3 {
+                let d = 3 * node + i;
+                if !touching {
+                    self.ties[d] = None;
+                } else if self.held_on(d).is_none() && self.ties[d].is_none() {
+                    self.ties[d] = Some(u[d]);
+                }
+            }
+        }
     }
 }

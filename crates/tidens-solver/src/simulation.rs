@@ -167,7 +167,10 @@ struct Evaluation {
     has_tangent: bool,
 }
 
-type ContactState = (Vec<Option<bool>>, Option<tidens_contact::StateSnapshot>);
+type ContactState = (
+    (Vec<Option<bool>>, Vec<Option<f64>>),
+    Option<tidens_contact::StateSnapshot>,
+);
 
 fn links(c: &ContactEvaluation) -> Vec<[usize; 4]> {
     c.terms
@@ -230,7 +233,12 @@ impl Simulation {
             scene.mesh.elements.clone(),
             material,
         )?;
-        let constraints = Constraints::new(&scene.mesh, scene.lengths, scene.lateral_walls)?;
+        let constraints = Constraints::new(
+            &scene.mesh,
+            scene.lengths,
+            scene.lateral_walls,
+            settings.contact.tied_planes,
+        )?;
         let element_cliques = constraints.element_cliques(&scene.mesh);
         let n_eq = constraints.dof_count() + 1;
         let system = SparseSystem::from_cliques(n_eq, element_cliques.iter().map(|c| c.as_slice()));

@@ -257,3 +257,39 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
+
+/// Sensitivity option: tying the particle to the die walls where it touches
+/// them blocks the lateral spreading that the mirror symmetry needs, so the
+/// sc cell densifies more slowly.
+#[test]
+fn tying_the_particle_to_the_walls_slows_densification() {
+    let run = |tied_planes: bool| {
+        let cell = Cell::sc(0.05, 1.0).unwrap();
+        let scene = Scene::from_cell(
+            &cell,
+            &MeshOptions {
+                level: 1,
+                grading: 1.0,
+            },
+        )
+        .unwrap();
+        let mut settings = Settings::new(LoadHistory {
+            stress: 15.0,
+            knockdown: 1.0,
+            ramp_time: 1.0,
+        });
+        settings.until_density = Some(0.9);
+        settings.tolerance = 0.05;
+        settings.contact.tied_planes = tied_planes;
+        let mut sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
+        sim.run(|_| true).unwrap();
+        sim.time()
+    };
+    let t_free = run(false);
+    let t_tied = run(true);
+    eprintln!("t(0.9): tied {t_tied:.2} s, frictionless {t_free:.2} s");
+    assert!(
+        t_tied > 1.1 * t_free,
+        "t(0.9): tied {t_tied:.2} s, frictionless {t_free:.2} s"
+    );
+}
