@@ -265,39 +265,50 @@ impl ParticleContact {
     /// so the residual stays smooth while Newton iterates: switching facets
     /// between iterations would make it jump.
     pub fn pair(&mut self, x: &[f64]) {
+        self.pairing = self
+            .surfaces
+            .iter()
+            .map(|s| vec![None; s.nodes.len()])
+            .collect();
+        self.pair_unpaired(x);
+    }
+
+    /// Pairs the slave nodes not paired yet that have come within the search
+    /// distance of a facet in the configuration `x`; returns how many of
+    /// them touch or press (so that a converged step can be checked for
+    /// contacts that appeared during it).
+    pub fn pair_unpaired(&mut self, x: &[f64]) -> usize {
         let pairs = self.candidate_pairs(x);
         let meshes = self.search_meshes(x, &pairs, |_| true);
         let mut masters: Vec<Vec<usize>> = vec![Vec::new(); self.surfaces.len()];
         for &(s, m) in &pairs {
             masters[s].push(m);
         }
-        self.pairing = (0..self.surfaces.len())
-            .map(|s| {
-                (0..self.surfaces[s].nodes.len())
-                    .into_par_iter()
-                    .map(|k| self.nearest_over(x, s, k, &masters[s], &meshes))
-                    .collect()
-            })
-            .collect();
+        let mut touching = 0;
+        for s in 0..self.surfaces.len() {
+            let found: Vec<Option<(usize, usize)>> = (0..self.surfaces[s].nodes.len())
+                .into_par_iter()
+                .map(|k| match self.pairing[s][k] {
+                    Some(_) => None,
+                    None => self.nearest_over(x, s, k, &masters[s], &meshes),
+                })
+                .collect();
+            for (k, f) in found.into_iter().enumerate() {
+                if let Some((m, facet)) = f {
+                    self.pairing[s][k] = Some((m, facet));
+                    if self.node_term(x, s, k, m, facet, false).is_some() {
+                        touching += 1;
+                    }
+                }
+            }
+        }
+        touching
     }
 
     /// Contact terms at the configuration `x` (current node coordinates,
-    /// `3 * node + i`), with tangents if asked. A paired node uses its facet;
-    /// an unpaired one is searched for on every surface whose box meets its
-    /// own, and takes the nearest facet.
+    /// `3 * node + i`), with tangents if asked, for the paired and tied
+    /// slave nodes.
     pub fn evaluate(&self, x: &[f64], with_tangent: bool) -> ContactEvaluation {
-        let pairs = self.candidate_pairs(x);
-        let paired = |s: usize, k: usize| {
-            self.pairing
-                .get(s)
-                .and_then(|v| v.get(k).copied().flatten())
-        };
-        let unpaired = |s: usize| (0..self.surfaces[s].nodes.len()).any(|k| paired(s, k).is_none());
-        let meshes = self.search_meshes(x, &pairs, unpaired);
-        let mut masters: Vec<Vec<usize>> = vec![Vec::new(); self.surfaces.len()];
-        for &(s, m) in &pairs {
-            masters[s].push(m);
-        }
         let work: Vec<(usize, usize)> = self
             .surfaces
             .iter()
@@ -320,10 +331,7 @@ impl ParticleContact {
                         with_tangent,
                     ));
                 }
-                let (m, facet) = match paired(s, k) {
-                    Some(p) => p,
-                    None => self.nearest_over(x, s, k, &masters[s], &meshes)?,
-                };
+                let (m, facet) = self.pairing.get(s)?.get(k).copied().flatten()?;
                 self.node_term(x, s, k, m, facet, with_tangent)
             })
             .collect();
@@ -368,6 +376,11 @@ impl ParticleContact {
         for (j, d) in dofs.iter().enumerate() {
             v[j] = x[*d];
         }
+        // Nodes clearly apart from the facet need no derivatives.
+        let band = -0.1 * self.settings.search_distance;
+        if self.state[s][k].lambda <= 0.0 && penetration(&v, xi) <= band {
+            return None;
+        }
         let area = 0.5 * self.surfaces[s].areas[k];
         let eps = self.settings.penalty;
         let (pen, grad, hess) = if with_tangent {
@@ -390,7 +403,7 @@ impl ParticleContact {
         // only by contacts about to close (a particle resting on another at a
         // point) is never free in a Newton iteration, while Newton's tangent
         // stays nearly consistent.
-        let touching = pen > -0.1 * self.settings.search_distance;
+        let touching = pen > band;
         if pressure <= 0.0 && !touching {
             return None;
         }

@@ -33,16 +33,16 @@ pub struct BodyEvaluation {
 /// Element-wise fields for output.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ElementFields {
-    /// von Mises (Cauchy) stress [MPa].
+    /// von Mises (Cauchy) stress \[MPa\].
     pub von_mises: Vec<f64>,
-    /// Mean (Cauchy) stress, tension positive [MPa].
+    /// Mean (Cauchy) stress, tension positive \[MPa\].
     pub mean_stress: Vec<f64>,
     /// Equivalent plastic strain [-].
     pub eqps: Vec<f64>,
 }
 
 impl Body {
-    /// A body with reference node coordinates `nodes` [mm] and 8-node
+    /// A body with reference node coordinates `nodes` \[mm\] and 8-node
     /// hexahedra `elements` (VTK order, right-handed), in the virgin state.
     pub fn new(
         nodes: Vec<[f64; 3]>,
@@ -125,7 +125,7 @@ impl Body {
     }
 
     /// Evaluates every element (in parallel) at displacement `u` (length
-    /// `dof_count`) [mm] after a step of `dt` [s] from the committed state.
+    /// `dof_count`) \[mm\] after a step of `dt` \[s\] from the committed state.
     /// Deterministic: each element is computed independently.
     pub fn evaluate(
         &self,
@@ -177,7 +177,7 @@ impl Body {
 }
 
 impl BodyEvaluation {
-    /// Internal force vector of the body (length `3 * nodes`) [N], summed in
+    /// Internal force vector of the body (length `3 * nodes`) \[N\], summed in
     /// element order (deterministic).
     pub fn internal_force(&self, body: &Body) -> Vec<f64> {
         let mut f = vec![0.0; body.dof_count()];

@@ -56,6 +56,26 @@ pub enum MeshError {
         /// The shape's half-size h.
         h: f64,
     },
+    /// An element or boundary face of a mesh handed to a converter refers to
+    /// a node that does not exist.
+    #[error("element {element} refers to node {node}, but the mesh has {node_count} nodes")]
+    NodeIndex {
+        /// The element (or the element named by the boundary face).
+        element: usize,
+        /// The out-of-range node index.
+        node: usize,
+        /// Number of nodes of the mesh.
+        node_count: usize,
+    },
+    /// A boundary face of a mesh handed to a converter is not a face of the
+    /// element it names.
+    #[error("boundary face {face} is not a face of element {element}")]
+    BoundaryFace {
+        /// Index of the boundary face.
+        face: usize,
+        /// The element it names.
+        element: usize,
+    },
     /// Mesh refinement level.
     #[error("level = {0}: must be in 1..={MAX_LEVEL}")]
     Level(u32),

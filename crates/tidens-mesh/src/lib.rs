@@ -1,6 +1,10 @@
-//! Hexahedral meshes for tidens: one octant of a spheroidal powder particle
-//! (semi-axes a, a, c; c along z, the loading direction) centred at the origin,
-//! and plain boxes for verification tests. Lengths are in mm.
+//! Meshes for tidens: one octant of a spheroidal powder particle (semi-axes
+//! a, a, c; c along z, the loading direction) centred at the origin, and plain
+//! boxes for verification tests. Lengths are in mm.
+//!
+//! - [`HexMesh`]: trilinear hexahedra ("cubed octant", [`hex`]).
+//! - [`TetMesh`]: quadratic 10-node tetrahedra ([`tet10`]) cut conformingly
+//!   from the hexahedra, with mid-edge nodes on the true curved surface.
 //!
 //! ```
 //! use tidens_mesh::{HexMesh, OctantSpec};
@@ -9,6 +13,13 @@
 //! let exact = std::f64::consts::PI * 0.05 * 0.05 * 0.04 / 6.0;
 //! assert!((mesh.volume() - exact).abs() < 0.01 * exact);
 //! assert!(mesh.min_scaled_jacobian() > 0.2);
+//!
+//! // The same octant in quadratic tetrahedra: 6 per hexahedron, curved faces
+//! // on the true spheroid, volume error O(h^4).
+//! let tets = tidens_mesh::TetMesh::spheroid_octant(&spec)?;
+//! assert_eq!(tets.element_count(), 6 * mesh.element_count());
+//! assert!((tets.volume() - exact).abs() < 1e-5 * exact);
+//! assert!(tets.min_relative_det_bound() > 0.0);
 //! # Ok::<(), tidens_mesh::MeshError>(())
 //! ```
 
@@ -17,15 +28,20 @@ mod cubed_octant;
 mod error;
 mod grading;
 pub mod hex;
+mod hex_split;
 mod quality;
+pub mod tet10;
+mod tet_mesh;
+mod tet_quality;
 mod transform;
 
 pub use cubed_octant::{OctantShape, radial_divisions};
 pub use error::{MAX_BLOCK_DIVISIONS, MAX_LEVEL, MAX_OCTANT_DIVISIONS, MeshError};
+pub use tet_mesh::{TetBoundaryFace, TetMesh, project_to_spheroid};
 
 use error::is_positive_length;
 
-/// One job: hexahedral meshes of spheroid octants and boxes.
+/// Hexahedral meshes of spheroid octants and boxes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HexMesh {
     /// Node coordinates \[mm\].

@@ -1,6 +1,7 @@
-//! Rigid transformations of a [`HexMesh`]: reflections and translations.
+//! Rigid transformations of a [`HexMesh`] and a [`TetMesh`]: reflections
+//! and translations.
 
-use crate::{BoundaryFace, FaceKind, HexMesh};
+use crate::{BoundaryFace, FaceKind, HexMesh, TetBoundaryFace, TetMesh};
 
 /// Permutation that reverses a hexahedron's handedness while keeping VTK order:
 /// it swaps the roles of xi and eta (corner 1 <-> 3, 5 <-> 7).
@@ -71,5 +72,80 @@ impl HexMesh {
             elements: self.elements.clone(),
             boundary: self.boundary.clone(),
         }
+    }
+}
+
+/// Permutation that reverses a quadratic tetrahedron's handedness while
+/// keeping VTK order: it swaps corners 1 and 2 and, with them, the mid-edge
+/// nodes of edges 0-1 <-> 0-2 and 1-3 <-> 2-3 (edge 1-2 stays).
+const REVERSE_TET: [usize; 10] = [0, 2, 1, 3, 6, 5, 4, 7, 9, 8];
+
+/// Reverses a 6-node triangle: corners 0-2-1, then edges 0-2, 2-1, 1-0.
+const REVERSE_TRIANGLE: [usize; 6] = [0, 2, 1, 5, 4, 3];
+
+impl TetMesh {
+    /// Mirror image: `x_i -> -x_i` for each axis with `flip[i]`.
+    ///
+    /// As for [`HexMesh::mirrored`]: after an odd number of flips every
+    /// element is renumbered to stay right-handed and every boundary triangle
+    /// reversed to keep its normal outward; `FaceKind::Plane::high` is toggled on
+    /// flipped axes; node and element numbering are unchanged.
+    pub fn mirrored(&self, flip: [bool; 3]) -> TetMesh {
+        let nodes = self
+            .nodes
+            .iter()
+            .map(|p| std::array::from_fn(|i| if flip[i] { 0.0 - p[i] } else { p[i] }))
+            .collect();
+        let odd = flip.iter().filter(|&&f| f).count() % 2 == 1;
+        let elements = if odd {
+            self.elements
+                .iter()
+                .map(|el| REVERSE_TET.map(|i| el[i]))
+                .collect()
+        } else {
+            self.elements.clone()
+        };
+        let boundary = self
+            .boundary
+            .iter()
+            .map(|f| TetBoundaryFace {
+                nodes: if odd {
+                    REVERSE_TRIANGLE.map(|i| f.nodes[i])
+                } else {
+                    f.nodes
+                },
+                element: f.element,
+                kind: mirrored_kind(f.kind, flip),
+            })
+            .collect();
+        TetMesh {
+            nodes,
+            elements,
+            boundary,
+        }
+    }
+
+    /// The mesh shifted by `offset` \[mm\].
+    pub fn translated(&self, offset: [f64; 3]) -> TetMesh {
+        TetMesh {
+            nodes: self
+                .nodes
+                .iter()
+                .map(|p| std::array::from_fn(|i| p[i] + offset[i]))
+                .collect(),
+            elements: self.elements.clone(),
+            boundary: self.boundary.clone(),
+        }
+    }
+}
+
+/// The face kind after mirroring the axes with `flip`.
+fn mirrored_kind(kind: FaceKind, flip: [bool; 3]) -> FaceKind {
+    match kind {
+        FaceKind::Plane { axis, high } => FaceKind::Plane {
+            axis,
+            high: high ^ flip[axis],
+        },
+        FaceKind::Curved => FaceKind::Curved,
     }
 }

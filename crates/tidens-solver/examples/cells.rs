@@ -39,7 +39,7 @@ fn main() {
     );
     let t0 = Instant::now();
     let r = sim.run(|p| {
-        if p.step % 10 == 0 || p.step < 10 {
+        if p.step % 50 == 0 {
             println!(
                 "step {} t {:.4e} dt {:.2e} rho {:.5} it {} pen {:.2e} contacts {}",
                 p.step,

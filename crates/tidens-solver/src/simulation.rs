@@ -172,9 +172,12 @@ type ContactState = (
     Option<tidens_contact::StateSnapshot>,
 );
 
+/// The pressed contact links of `c` (slave surface, node, master surface,
+/// facet): the tangent of a factor reused across iterations must have them.
 fn links(c: &ContactEvaluation) -> Vec<[usize; 4]> {
     c.terms
         .iter()
+        .filter(|t| t.pressure > 0.0)
         .map(|t| [t.slave.0, t.slave.1, t.master.0, t.master.1])
         .collect()
 }
@@ -838,6 +841,16 @@ impl Simulation {
                         iterations,
                     ));
                 }
+                // Nodes that came near another particle during the step are
+                // paired now; if any of them touches, Newton goes on.
+                let x = self.current_coordinates(&u);
+                let appeared = self.contact.as_mut().map_or(0, |c| c.pair_unpaired(&x));
+                if appeared > 0 {
+                    eval = self
+                        .evaluate_state(&u, dt, false)
+                        .map_err(|e| fail(e, iterations))?;
+                    continue;
+                }
                 let contact_penetration = eval.contact.max_penetration();
                 if contact_penetration <= self.penetration_tol {
                     break Ok(Solved {
@@ -1041,8 +1054,22 @@ impl Simulation {
     /// Adds the cliques of the contact terms of `contact` to the sparsity
     /// pattern (which only grows) and starts a new symbolic factorisation.
     fn grow_pattern(&mut self, contact: &ContactEvaluation) {
+        let Some(c) = &self.contact else { return };
         for t in &contact.terms {
-            let mut clique = self.constraints.clique(&t.dofs);
+            // The slave with every facet around its master facet, so that
+            // sliding onto a neighbouring facet needs no new pattern.
+            let master = &c.surfaces()[t.master.0];
+            let mut dofs: Vec<usize> = t.dofs[..3].to_vec();
+            for &f in master.ring(t.master.1) {
+                dofs.extend(
+                    master.quads[f]
+                        .iter()
+                        .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]),
+                );
+            }
+            dofs.sort_unstable();
+            dofs.dedup();
+            let mut clique = self.constraints.clique(&dofs);
             clique.sort_unstable();
             self.contact_cliques.insert(clique);
         }
