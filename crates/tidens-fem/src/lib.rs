@@ -22,7 +22,7 @@ pub mod mean_dilatation;
 mod reference;
 mod sparse;
 
-pub use body::{Body, BodyEvaluation, ElementFields};
+pub use body::{Body, BodyEvaluation, ElementFields, ElementKind, ElementResult};
 pub use error::FemError;
 pub use mean_dilatation::{
     ElementGeometry, ElementOutput, Hex8Geometry, Hex8Output, MeanDilatationGeometry,

@@ -79,8 +79,12 @@ fn element_tangent_equals_finite_differences() {
                 up[q] += h;
                 let mut um = u.clone();
                 um[q] -= h;
-                let rp = body.evaluate(&up, dt, false).unwrap().elements[0].residual;
-                let rm = body.evaluate(&um, dt, false).unwrap().elements[0].residual;
+                let rp = body.evaluate(&up, dt, false).unwrap().elements[0]
+                    .residual
+                    .clone();
+                let rm = body.evaluate(&um, dt, false).unwrap().elements[0]
+                    .residual
+                    .clone();
                 for p in 0..24 {
                     let fd = (rp[p] - rm[p]) / (2.0 * h);
                     let an = k_an[p * 24 + q];

@@ -12,7 +12,7 @@
 use crate::error::SolverError;
 use serde::{Deserialize, Serialize};
 use tidens_fem::DOF_DROPPED;
-use tidens_mesh::{FaceKind, HexMesh};
+use tidens_mesh::FaceKind;
 
 /// How one dof may meet the two planes normal to its axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -54,29 +54,33 @@ pub struct Constraints {
 const MAX_FLIPS: u8 = 4;
 
 impl Constraints {
-    /// Classifies the dofs of `mesh` in the box `lengths` [mm]. Nodes start in
-    /// contact where they touch a plane (gap below `1e-9` of the box size).
-    pub fn new(
-        mesh: &HexMesh,
+    /// Classifies the dofs of a mesh with node coordinates `nodes` and
+    /// boundary faces `faces` (node lists with their kind) in the box
+    /// `lengths` [mm]. Nodes start in contact where they touch a plane (gap
+    /// below `1e-9` of the box size). With `tied_planes`, nodes in contact
+    /// with a plane are also tied to it tangentially (a sensitivity option).
+    pub fn new<'a>(
+        nodes: &[[f64; 3]],
+        faces: impl IntoIterator<Item = (&'a [usize], FaceKind)>,
         lengths: [f64; 3],
         lateral_walls: bool,
         tied_planes: bool,
     ) -> Result<Self, SolverError> {
-        let n_dof = 3 * mesh.nodes.len();
+        let n_dof = 3 * nodes.len();
         let scale = lengths.iter().cloned().fold(0.0, f64::max);
         let tol = 1e-9 * scale;
         let plane_exists = |axis: usize, high: bool| !high || axis == 2 || lateral_walls;
-        let mut on_plane: Vec<[Option<bool>; 3]> = vec![[None; 3]; mesh.nodes.len()];
-        let mut curved = vec![false; mesh.nodes.len()];
-        for face in &mesh.boundary {
-            match face.kind {
+        let mut on_plane: Vec<[Option<bool>; 3]> = vec![[None; 3]; nodes.len()];
+        let mut curved = vec![false; nodes.len()];
+        for (face, kind) in faces {
+            match kind {
                 FaceKind::Plane { axis, high } => {
-                    for &n in &face.nodes {
+                    for &n in face {
                         on_plane[n][axis] = Some(high);
                     }
                 }
                 FaceKind::Curved => {
-                    for &n in &face.nodes {
+                    for &n in face {
                         curved[n] = true;
                     }
                 }
@@ -84,7 +88,7 @@ impl Constraints {
         }
         let mut x0 = vec![0.0; n_dof];
         let mut rules = vec![Rule::Free; n_dof];
-        for (node, p) in mesh.nodes.iter().enumerate() {
+        for (node, p) in nodes.iter().enumerate() {
             for axis in 0..3 {
                 let d = 3 * node + axis;
                 x0[d] = p[axis];
@@ -185,20 +189,13 @@ impl Constraints {
             )
     }
 
-    /// Equation cliques of the elements for every possible contact state:
-    /// the element's own dofs, plus the piston equation when any of its dofs
-    /// may follow the piston. The sparsity pattern built from them never
-    /// changes during a run.
-    pub fn element_cliques(&self, mesh: &HexMesh) -> Vec<Vec<usize>> {
-        mesh.elements
-            .iter()
-            .map(|el| {
-                let dofs: Vec<usize> = el
-                    .iter()
-                    .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2])
-                    .collect();
-                self.clique(&dofs)
-            })
+    /// Equation cliques of the elements of `body` for every possible contact
+    /// state: the element's own dofs, plus the piston equation when any of
+    /// its dofs may follow the piston. The sparsity pattern built from them
+    /// never changes during a run.
+    pub fn element_cliques(&self, body: &tidens_fem::Body) -> Vec<Vec<usize>> {
+        (0..body.element_count())
+            .map(|e| self.clique(&body.element_dofs(e)))
             .collect()
     }
 

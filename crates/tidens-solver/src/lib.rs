@@ -24,4 +24,5 @@ pub use scene::{MAX_MESH_LEVEL, MeshOptions, Particle, Scene};
 pub use settings::{ContactOptions, NewtonSettings, Settings};
 pub use simulation::{CurvePoint, Fields, RunStats, Simulation, Status};
 pub use tidens_contact::ContactMode;
+pub use tidens_fem::ElementKind;
 pub use tidens_material::{Material, Preset};

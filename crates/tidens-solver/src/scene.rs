@@ -5,7 +5,10 @@
 use crate::cell::Cell;
 use crate::error::SolverError;
 use serde::{Deserialize, Serialize};
-use tidens_mesh::{BoundaryFace, FaceKind, HexMesh, OctantSpec, divisions_for_level};
+use tidens_fem::ElementKind;
+use tidens_mesh::{
+    BoundaryFace, FaceKind, HexMesh, OctantSpec, TetMesh, divisions_for_level, project_to_spheroid,
+};
 
 /// Finest mesh level: level 6 needs about 2.5 GB for the sparse factor of the
 /// sc cell, level 7 about four times that.
@@ -54,6 +57,9 @@ pub struct Scene {
     pub lateral_walls: bool,
     /// All particles in one mesh (no shared nodes between particles).
     pub mesh: HexMesh,
+    /// When set, the body is meshed with these 10-node tetrahedra, cut from
+    /// `mesh` (6 per hexahedron) with mid-edge nodes on the true surface.
+    pub tet_mesh: Option<TetMesh>,
     /// The particle pieces (empty for the verification blocks).
     pub particles: Vec<Particle>,
     /// Exact initial relative density of the geometry (not of the mesh), if known.
@@ -61,6 +67,8 @@ pub struct Scene {
     /// Length scale R of tolerances: the largest particle semi-axis, or the
     /// largest box edge for blocks [mm].
     pub radius: f64,
+    /// The cell the scene was meshed from (none for the blocks).
+    pub cell: Option<Cell>,
 }
 
 impl Scene {
@@ -134,7 +142,79 @@ impl Scene {
             particles,
             rho0_exact: Some(cell.rho0()),
             radius: cell.largest_radius(),
+            tet_mesh: None,
+            cell: Some(cell.clone()),
         })
+    }
+
+    /// The scene meshed with elements of `kind`: hexahedra as built, or
+    /// 10-node tetrahedra cut from them, with the mid-edge nodes of curved
+    /// faces on the spheroid. Particle-particle contact works on the
+    /// hexahedra's quad facets only, so tetrahedra are for single-particle
+    /// cells and blocks.
+    pub fn with_element(mut self, kind: ElementKind) -> Result<Scene, SolverError> {
+        self.tet_mesh = match kind {
+            ElementKind::Hex8 => None,
+            ElementKind::Tet10 => {
+                if self.particles.len() > 1 {
+                    return Err(SolverError::Unsupported(
+                        "tet10 meshes are available for single-particle cells (sc) and blocks; \
+                         particle-particle contact needs the hex8 quad facets"
+                            .into(),
+                    ));
+                }
+                let surface = self
+                    .cell
+                    .as_ref()
+                    .and_then(|cell| cell.octants.first().map(|o| (o.clone(), cell.lengths)));
+                Some(match surface {
+                    Some((octant, lengths)) => {
+                        let centre = octant.centre(lengths);
+                        TetMesh::from_hex_with_surface(&self.mesh, |p| {
+                            let q = project_to_spheroid(
+                                [p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]],
+                                octant.a,
+                                octant.c,
+                            );
+                            [q[0] + centre[0], q[1] + centre[1], q[2] + centre[2]]
+                        })?
+                    }
+                    None => TetMesh::from_hex(&self.mesh)?,
+                })
+            }
+        };
+        Ok(self)
+    }
+
+    /// The element the body is meshed with.
+    pub fn element(&self) -> ElementKind {
+        if self.tet_mesh.is_some() {
+            ElementKind::Tet10
+        } else {
+            ElementKind::Hex8
+        }
+    }
+
+    /// Node coordinates of the body mesh [mm].
+    pub fn nodes(&self) -> &[[f64; 3]] {
+        match &self.tet_mesh {
+            Some(t) => &t.nodes,
+            None => &self.mesh.nodes,
+        }
+    }
+
+    /// Boundary faces of the body mesh: node lists (4 for quads, 6 for
+    /// quadratic triangles) and kinds.
+    pub fn boundary_faces(&self) -> Vec<(&[usize], FaceKind)> {
+        match &self.tet_mesh {
+            Some(t) => t.boundary.iter().map(|f| (&f.nodes[..], f.kind)).collect(),
+            None => self
+                .mesh
+                .boundary
+                .iter()
+                .map(|f| (&f.nodes[..], f.kind))
+                .collect(),
+        }
     }
 
     /// A fully dense block filling the die (verification ladder item 3):
@@ -147,6 +227,8 @@ impl Scene {
             particles: Vec::new(),
             rho0_exact: Some(1.0),
             radius: lengths.iter().cloned().fold(0.0, f64::max),
+            tet_mesh: None,
+            cell: None,
         })
     }
 
@@ -161,6 +243,8 @@ impl Scene {
             particles: Vec::new(),
             rho0_exact: Some(1.0),
             radius: lengths.iter().cloned().fold(0.0, f64::max),
+            tet_mesh: None,
+            cell: None,
         })
     }
 }

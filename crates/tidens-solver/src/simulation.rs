@@ -66,6 +66,10 @@ pub struct Fields {
     pub contact_pressure: Vec<f64>,
     /// Hexahedra (VTK order).
     pub cells: Vec<[usize; 8]>,
+    /// Element nodes (VTK order) of every element, whatever its kind.
+    pub connectivity: Vec<Vec<usize>>,
+    /// The cell type name in VTK/meshio (`hexahedron` or `tetra10`).
+    pub cell_type: &'static str,
     /// Element fields (von Mises, mean stress, equivalent plastic strain).
     pub element: ElementFields,
 }
@@ -231,18 +235,22 @@ impl Simulation {
             material.creep_c,
             material.creep_n,
         )?;
-        let body = Body::new(
-            scene.mesh.nodes.clone(),
-            scene.mesh.elements.clone(),
-            material,
-        )?;
+        let body = match &scene.tet_mesh {
+            Some(t) => Body::new_tet10(t.nodes.clone(), t.elements.clone(), material)?,
+            None => Body::new(
+                scene.mesh.nodes.clone(),
+                scene.mesh.elements.clone(),
+                material,
+            )?,
+        };
         let constraints = Constraints::new(
-            &scene.mesh,
+            scene.nodes(),
+            scene.boundary_faces(),
             scene.lengths,
             scene.lateral_walls,
             settings.contact.tied_planes,
         )?;
-        let element_cliques = constraints.element_cliques(&scene.mesh);
+        let element_cliques = constraints.element_cliques(&body);
         let n_eq = constraints.dof_count() + 1;
         let system = SparseSystem::from_cliques(n_eq, element_cliques.iter().map(|c| c.as_slice()));
         let contact = particle_contact(scene, &material, &settings)?;
@@ -460,7 +468,13 @@ impl Simulation {
             displacement,
             contact_force,
             contact_pressure,
-            cells: self.body.elements().to_vec(),
+            cells: (0..self.body.element_count())
+                .filter_map(|e| <[usize; 8]>::try_from(self.body.element_nodes(e)).ok())
+                .collect(),
+            connectivity: (0..self.body.element_count())
+                .map(|e| self.body.element_nodes(e).to_vec())
+                .collect(),
+            cell_type: self.body.kind().vtk_name(),
             element: self.fields.clone(),
         }
     }

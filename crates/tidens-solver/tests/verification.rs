@@ -2,7 +2,8 @@
 //! end to end on a coarse mesh.
 
 use tidens_solver::{
-    Cell, LoadHistory, Material, MeshOptions, Preset, Scene, Settings, Simulation, Status,
+    Cell, ElementKind, LoadHistory, Material, MeshOptions, Preset, Scene, Settings, Simulation,
+    Status,
 };
 
 /// The sc cell of `material` at `stress` [MPa] (1 s ramp), pressed to
@@ -45,11 +46,22 @@ fn analytic_height(l0: f64, c: f64, n: f64, nominal_stress: f64, t_eff: f64) -> 
 #[test]
 fn cube_between_platens_follows_the_norton_height_law() {
     let l0 = 1.0;
-    for &(n, ramp) in &[(1.0, 0.0), (2.8, 0.0), (2.8, 50.0), (5.0, 50.0)] {
+    let cases = [
+        (ElementKind::Hex8, 1.0, 0.0),
+        (ElementKind::Hex8, 2.8, 0.0),
+        (ElementKind::Hex8, 2.8, 50.0),
+        (ElementKind::Hex8, 5.0, 50.0),
+        (ElementKind::Tet10, 2.8, 0.0),
+        (ElementKind::Tet10, 5.0, 50.0),
+    ];
+    for &(kind, n, ramp) in &cases {
         let sigma: f64 = 10.0;
         let c = 3e-4 / sigma.powf(n); // 3e-4 /s at the nominal stress
         let material = Material::new(4.35e4, 0.3, c, n).unwrap();
-        let scene = Scene::free_block([l0; 3], [2, 2, 2]).unwrap();
+        let scene = Scene::free_block([l0; 3], [2, 2, 2])
+            .unwrap()
+            .with_element(kind)
+            .unwrap();
         let load = LoadHistory {
             stress: sigma,
             knockdown: 1.0,
@@ -74,10 +86,9 @@ fn cube_between_platens_follows_the_norton_height_law() {
         })
         .unwrap();
         assert!(reached <= 0.5, "n={n}: stopped at height {reached}");
-        eprintln!("n={n} ramp={ramp}: worst {worst:.2e}");
         assert!(
             worst < 0.01,
-            "n={n} ramp={ramp}: height off the analytic law by {:.3} %",
+            "{kind:?} n={n} ramp={ramp}: height off the analytic law by {:.3} %",
             100.0 * worst
         );
     }
@@ -89,63 +100,59 @@ fn cube_between_platens_follows_the_norton_height_law() {
 /// loses volume goes beyond sigma/K).
 #[test]
 fn dense_block_in_the_die_relaxes_from_constrained_to_bulk_modulus() {
-    let material = Preset::Ti64Creep1293K.material();
-    let (k, m) = (material.bulk_modulus(), material.constrained_modulus());
-    let sigma = 10.0;
-    let scene = Scene::die_block([1.0; 3], [3, 3, 3]).unwrap();
-    let mut settings = Settings::new(LoadHistory {
-        stress: sigma,
-        knockdown: 1.0,
-        ramp_time: 0.0,
-    });
-    // Relaxation time of the deviatoric stress ~ 1/(3 G C sigma^(n-1)).
-    settings.until_time = Some(2e6);
-    settings.dt_initial = Some(1e-3);
-    settings.tolerance = 0.02;
-    let mut sim = Simulation::new(&scene, material, settings).unwrap();
-    let mut strains = Vec::new();
-    let mut densities = Vec::new();
-    sim.run(|p| {
-        strains.push(-(1.0 + p.piston_displacement).ln());
-        densities.push(p.rel_density);
-        true
-    })
-    .unwrap();
-    assert_eq!(sim.status(), Status::ReachedTime);
-    let first = strains[0];
-    eprintln!(
-        "first/(s/M) {} last/(s/K) {} n {}",
-        strains[0] / (sigma / m),
-        strains.last().unwrap() / (sigma / k),
-        strains.len()
-    );
-    let last = *strains.last().unwrap();
-    assert!(
-        (first / (sigma / m) - 1.0).abs() < 0.01,
-        "load-up strain {first:e} vs sigma/M {:e}",
-        sigma / m
-    );
-    assert!(
-        (last / (sigma / k) - 1.0).abs() < 0.01,
-        "final strain {last:e} vs sigma/K {:e}",
-        sigma / k
-    );
-    for w in strains.windows(2) {
+    for kind in [ElementKind::Hex8, ElementKind::Tet10] {
+        let material = Preset::Ti64Creep1293K.material();
+        let (k, m) = (material.bulk_modulus(), material.constrained_modulus());
+        let sigma = 10.0;
+        let scene = Scene::die_block([1.0; 3], [3, 3, 3])
+            .unwrap()
+            .with_element(kind)
+            .unwrap();
+        let mut settings = Settings::new(LoadHistory {
+            stress: sigma,
+            knockdown: 1.0,
+            ramp_time: 0.0,
+        });
+        // Relaxation time of the deviatoric stress ~ 1/(3 G C sigma^(n-1)).
+        settings.until_time = Some(2e6);
+        settings.dt_initial = Some(1e-3);
+        settings.tolerance = 0.02;
+        let mut sim = Simulation::new(&scene, material, settings).unwrap();
+        let mut strains = Vec::new();
+        let mut densities = Vec::new();
+        sim.run(|p| {
+            strains.push(-(1.0 + p.piston_displacement).ln());
+            densities.push(p.rel_density);
+            true
+        })
+        .unwrap();
+        assert_eq!(sim.status(), Status::ReachedTime);
+        let (first, last) = (strains[0], *strains.last().unwrap());
+        let (ratio_m, ratio_k) = (first / (sigma / m), last / (sigma / k));
         assert!(
-            w[1] >= w[0] - 1e-12 * sigma / k,
-            "piston strain decreased: {} -> {}",
-            w[0],
-            w[1]
+            (ratio_m - 1.0).abs() < 0.01,
+            "{kind:?}: load-up strain / (sigma/M) = {ratio_m}"
         );
-    }
-    let bound = sigma / k;
-    assert!(
-        strains.iter().all(|&e| e <= bound),
-        "piston strain beyond sigma/K"
-    );
-    // Dense stays dense: only elastic volume change, no densification.
-    for r in &densities {
-        assert!((r - 1.0).abs() < 1e-9, "density {r}");
+        assert!(
+            (ratio_k - 1.0).abs() < 0.01,
+            "{kind:?}: final strain / (sigma/K) = {ratio_k}"
+        );
+        for w in strains.windows(2) {
+            assert!(
+                w[1] >= w[0] - 1e-12 * sigma / k,
+                "{kind:?}: piston strain decreased: {} -> {}",
+                w[0],
+                w[1]
+            );
+        }
+        assert!(
+            strains.iter().all(|&e| e <= sigma / k),
+            "{kind:?}: piston strain beyond sigma/K"
+        );
+        // Dense stays dense: only elastic volume change, no densification.
+        for r in &densities {
+            assert!((r - 1.0).abs() < 1e-9, "{kind:?}: density {r}");
+        }
     }
 }
 
