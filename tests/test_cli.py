@@ -77,3 +77,78 @@ def test_version(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as e:
         main(["--version"])
     assert e.value.code == 0 and "tidens" in capsys.readouterr().out
+
+
+def test_bcc_run_writes_contact_pressure_and_particles(tmp_path: Path) -> None:
+    out = tmp_path / "bcc"
+    code = main(["run", "--cell", "bcc", "--stress", "10", "--until-density", "0.72", "--no-plot",
+                 "--out", str(out), *QUICK])
+    assert code == 0
+    mesh = meshio.read(out / "fields_final.vtu")
+    pressure = mesh.point_data["contact_pressure_MPa"]
+    assert pressure.shape == (len(mesh.points),) and pressure.max() > 0.0 and pressure.min() >= 0.0
+    particle = mesh.cell_data["particle"][0]
+    assert set(particle.tolist()) == {0, 1}
+    # Identical octants: the same mesh each.
+    assert np.count_nonzero(particle == 0) == np.count_nonzero(particle == 1)
+    s = json.loads((out / "summary.json").read_text())
+    radius = 0.05
+    assert 0.0 < s["max_penetration_mm"] < 1e-4 * radius
+    assert s["cell"]["name"] == "bcc" and len(s["cell"]["octants"]) == 2
+    assert s["contact"] == {"mode": "frictionless", "tied_planes": False, "penalty_factor": 10.0,
+                            "penetration_tolerance": 1e-4}
+    # The default snapshot densities below the bcc cell's rho0 are skipped.
+    assert not (out / "fields_rho0.600.vtu").exists()
+
+
+def test_cell_file_from_the_command_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    cell = tmp_path / "overlap.toml"
+    cell.write_text('lengths_mm = [0.1, 0.1, 0.1]\n'
+                    '[[octants]]\ncorner = "000"\na = 0.06\nc = 0.06\n'
+                    '[[octants]]\ncorner = "100"\na = 0.06\nc = 0.06\n')
+    args = ["run", "--cell-file", str(cell), "--stress", "10", "--until-density", "0.9", "--out", str(tmp_path / "o"), *QUICK]
+    assert main(args) == 2
+    assert "octants 0 and 1 overlap" in capsys.readouterr().err
+    cell.write_text('lengths_mm = [0.1, 0.1, 0.1]\n[[octants]]\ncorner = [true, false]\na = 0.06\nc = 0.06\n')
+    with pytest.raises(SystemExit) as e:
+        main(args)
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert str(cell) in err and "octants[0].corner" in err
+
+
+@pytest.mark.parametrize(
+    ("options", "named"),
+    [
+        (["--cell", "sc", "--size-ratio", "2"], ("--size-ratio", "sc2")),
+        (["--size-ratio", "2"], ("--size-ratio", "sc2")),
+        (["--cell", "bcc", "--cell-file", "cell.toml"], ("--cell", "--cell-file")),
+        (["--cell-file", "cell.toml", "--radius", "0.1"], ("--radius", "--cell-file")),
+        (["--cell-file", "cell.toml", "--size-ratio", "2"], ("--size-ratio", "--cell-file")),
+        (["--contact", "sticky"], ("--contact", "frictionless", "tied")),
+    ],
+)
+def test_conflicting_cell_options_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], options: list[str], named: tuple[str, ...]
+) -> None:
+    (tmp_path / "cell.toml").write_text(
+        'lengths_mm = [0.1, 0.1, 0.1]\n[[octants]]\ncorner = "000"\na = 0.1\nc = 0.1\n'
+    )
+    options = [str(tmp_path / o) if o == "cell.toml" else o for o in options]
+    with pytest.raises(SystemExit) as e:
+        main(["run", *options, "--stress", "10", "--until-density", "0.9", "--out", str(tmp_path / "o"), *QUICK])
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert all(n in err for n in named), err
+    assert not (tmp_path / "o").exists()
+
+
+def test_tied_planes_help_says_it_is_a_sensitivity_option(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as e:
+        main(["run", "--help"])
+    assert e.value.code == 0
+    text = " ".join(capsys.readouterr().out.split())
+    tied = text[text.rindex("--tied-planes"):]  # its description, after the usage line
+    assert "sensitivity option, not the default" in tied[:200]
+    for option in ("--cell {sc,bcc,fcc,sc2}", "--cell-file PATH", "--size-ratio", "--contact {frictionless,tied}"):
+        assert option in text

@@ -11,6 +11,7 @@ Units everywhere: mm, N, MPa, s. A run in a few lines::
 
 from . import cells, continuum, materials
 from ._core import (
+    CONTACT_MODES,
     Cell,
     ConvergenceError,
     Material,
@@ -25,6 +26,7 @@ from .result import Result
 from .snapshot import Snapshot
 
 __all__ = [
+    "CONTACT_MODES",
     "DEFAULT_MESH_LEVEL",
     "DEFAULT_TOLERANCE",
     "Case",

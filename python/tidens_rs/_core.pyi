@@ -4,7 +4,7 @@ Private module: use the public API of :mod:`tidens_rs`.
 """
 
 from collections.abc import Callable
-from typing import Any, final
+from typing import Any, TypeAlias, final
 
 import numpy as np
 import numpy.typing as npt
@@ -19,10 +19,16 @@ __all__ = [
     "tmp_creep_coefficient",
     "__version__",
     "PRESET_NAMES",
+    "CONTACT_MODES",
+    "DEFAULT_SIZE_RATIO",
 ]
 
 __version__: str
 PRESET_NAMES: list[str]
+CONTACT_MODES: list[str]
+DEFAULT_SIZE_RATIO: float
+
+_Octant: TypeAlias = tuple[tuple[bool, bool, bool], float, float]
 
 class TidensError(Exception):
     """Base class of the errors raised by the solver."""
@@ -66,8 +72,17 @@ class Material:
 class Cell:
     """A box [0,Lx]x[0,Ly]x[0,Lz] of mirror planes with particle octants at its corners."""
 
+    def __new__(
+        cls, name: str, lengths_mm: tuple[float, float, float], octants: list[_Octant]
+    ) -> Cell: ...
     @staticmethod
     def sc(radius_mm: float = 0.05, aspect_ratio: float = 1.0) -> Cell: ...
+    @staticmethod
+    def bcc(radius_mm: float = 0.05, aspect_ratio: float = 1.0) -> Cell: ...
+    @staticmethod
+    def fcc(radius_mm: float = 0.05, aspect_ratio: float = 1.0) -> Cell: ...
+    @staticmethod
+    def sc2(radius_mm: float = 0.05, size_ratio: float = 1.566, aspect_ratio: float = 1.0) -> Cell: ...
     @property
     def name(self) -> str: ...
     @property
@@ -75,7 +90,7 @@ class Cell:
     @property
     def rho0(self) -> float: ...
     @property
-    def octants(self) -> list[tuple[tuple[bool, bool, bool], float, float]]: ...
+    def octants(self) -> list[_Octant]: ...
 
 @final
 class Simulation:
@@ -101,6 +116,10 @@ class Simulation:
         time_targets_s: list[float] = ...,
         newton_max_iterations: int = 25,
         newton_residual_tolerance: float = 1e-6,
+        contact: str = "frictionless",
+        tied_planes: bool = False,
+        contact_penalty_factor: float = 10.0,
+        penetration_tolerance: float = 1e-4,
     ) -> Simulation: ...
     def advance(self) -> dict[str, float]:
         """One converged step (GIL released); returns its curve point."""

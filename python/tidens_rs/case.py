@@ -10,7 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from . import _core, io
-from ._core import Cell, ConvergenceError, Material
+from ._core import CONTACT_MODES, Cell, ConvergenceError, Material
 from .result import Result
 from .snapshot import Snapshot
 
@@ -47,6 +47,21 @@ class SolverSettings:
     newton_max_iterations, newton_residual_tolerance
         Newton iterations before a step is cut back, and the converged
         residual as a fraction of the applied piston force.
+    contact_penalty_factor
+        Penalty stiffness of particle-particle contact as a multiple of E/h,
+        h the mean surface element size, in [0.01, 1e4]. The augmented
+        Lagrangian iterates the contact pressures until the penetration is
+        below ``penetration_tolerance``, so the factor changes the cost of a
+        step, not its result.
+    penetration_tolerance
+        Largest particle-particle penetration allowed in a converged step, as
+        a fraction of the largest particle radius, in [1e-8, 1e-2]; the
+        solver aims at half of it. The curve reports the penetration reached
+        (``max_penetration_mm``).
+
+    The contact *model* (frictionless or tied particle contact, tied die
+    walls) is physics, not a solver knob: it is :attr:`Case.contact` and
+    :attr:`Case.tied_planes`.
     """
 
     mesh_level: int = DEFAULT_MESH_LEVEL
@@ -58,6 +73,8 @@ class SolverSettings:
     max_steps: int = 100_000
     newton_max_iterations: int = 25
     newton_residual_tolerance: float = 1e-6
+    contact_penalty_factor: float = 10.0
+    penetration_tolerance: float = 1e-4
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -73,6 +90,18 @@ class Case:
     ``stress_mpa`` is the applied (nominal) piston stress sigma, reached by a
     linear ramp over ``ramp_time_s`` and then held; ``knockdown`` (f) models
     die-wall friction: the cell feels f sigma.
+
+    ``contact`` is how touching particles interact: ``"frictionless"``
+    (they slide freely; the default, an assumption the seed leaves open) or
+    ``"tied"`` (no sliding once closed; the contact then carries shear and
+    tension). It matters only for cells of more than one particle (bcc, fcc,
+    sc2, custom cells): sc has no particle-particle contact.
+    ``tied_planes=True`` ties particle surface nodes that touch a rigid plane
+    of the die where they touch it. It is a sensitivity option, not the
+    default: the box faces are mirror planes of the packing, on which the
+    tangential traction must vanish, so the default frictionless planes are
+    the model; tied planes act as rough walls that block the lateral
+    spreading symmetry requires (the sc cell densifies more slowly).
     """
 
     cell: Cell
@@ -81,6 +110,13 @@ class Case:
     knockdown: float = 1.0
     ramp_time_s: float = 1.0
     solver: SolverSettings = field(default_factory=SolverSettings)
+    contact: str = "frictionless"
+    tied_planes: bool = False
+
+    def __post_init__(self) -> None:
+        # Fail on a typo when the case is written, not when it is run.
+        if self.contact not in CONTACT_MODES:
+            raise ValueError(f"contact = {self.contact!r}: must be one of {', '.join(CONTACT_MODES)}")
 
     def simulation(
         self,
@@ -108,6 +144,10 @@ class Case:
             time_targets_s=list(time_targets_s),
             newton_max_iterations=s.newton_max_iterations,
             newton_residual_tolerance=s.newton_residual_tolerance,
+            contact=self.contact,
+            tied_planes=self.tied_planes,
+            contact_penalty_factor=s.contact_penalty_factor,
+            penetration_tolerance=s.penetration_tolerance,
         )
 
     def run(

@@ -2,16 +2,68 @@
 [0,Lx]x[0,Ly]x[0,Lz] holding particle octants at its corners (DESIGN.md
 section 2).
 
+The four packings of the seed are presets (:func:`sc`, :func:`bcc`,
+:func:`fcc`, :func:`sc2`); any other arrangement of octants is a
+:func:`custom` cell, in code or from a cell file (:func:`from_file`).
+
 The creep law has no length scale, so the densification curve does not
 depend on the particle radius; it only sets the units of the fields.
+
+Cell files
+----------
+JSON or TOML (by the file's suffix, ``.json`` or ``.toml``), one cell::
+
+    name = "my-cell"                 # optional, default: the file name's stem
+    lengths_mm = [0.1, 0.1, 0.1]     # box edges Lx, Ly, Lz [mm]; z is the load
+
+    [[octants]]                      # one table per particle piece
+    corner = [false, false, false]   # or "000": the box corner at the centre,
+                                     # true / "1" = the high end L_i of that axis
+    a = 0.05                         # semi-axis along x and y [mm]
+    c = 0.05                         # semi-axis along z [mm]
+
+    [[octants]]
+    corner = "111"
+    a = 0.05
+    c = 0.05
+
+or the same as JSON: ``{"name": ..., "lengths_mm": [...], "octants": [{"corner":
+[false, false, false], "a": 0.05, "c": 0.05}, ...]}``. Any other key is an
+error (a misspelt key would otherwise be ignored silently). Ranges, checked by
+the core: lengths and semi-axes in [1e-6, 1e3] mm, c/a in [0.2, 5], each
+octant inside the box (a <= Lx, Ly; c <= Lz). Errors name the field, e.g.
+``octants[1].a``. Particles that overlap are found when the cell is meshed:
+:class:`tidens_rs.Simulation` (so :meth:`tidens_rs.Case.run`) raises
+:class:`tidens_rs.UnsupportedError`. The check allows a relative 1e-9 only,
+so give the lengths of a cell whose particles touch to full precision (the
+bcc box edge 2R/sqrt(3) as 0.05773502691896258 for R = 0.05, not 0.057735),
+or round them up. Reading TOML needs Python >= 3.11
+(``tomllib``); on 3.10 use JSON.
 """
 
 from __future__ import annotations
 
-from ._core import Cell
+import json
+import math
+import numbers
+import sys
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._core import DEFAULT_SIZE_RATIO, Cell
 
 DEFAULT_RADIUS_MM = 0.05
-CELL_NAMES = ("sc",)
+CELL_NAMES = ("sc", "bcc", "fcc", "sc2")
+
+Corner = tuple[bool, bool, bool]
+Octant = tuple[Corner, float, float]
+"""One particle piece: (corner, a_mm, c_mm), see :func:`custom`."""
+
+_FILE_KEYS = ("name", "lengths_mm", "octants")
+_OCTANT_KEYS = ("corner", "a", "c")
 
 
 def sc(radius_mm: float = DEFAULT_RADIUS_MM, aspect_ratio: float = 1.0) -> Cell:
@@ -20,11 +72,228 @@ def sc(radius_mm: float = DEFAULT_RADIUS_MM, aspect_ratio: float = 1.0) -> Cell:
     return Cell.sc(radius_mm, aspect_ratio)
 
 
-def by_name(name: str, radius_mm: float = DEFAULT_RADIUS_MM, aspect_ratio: float = 1.0) -> Cell:
-    """The cell called ``name`` (one of :data:`CELL_NAMES`)."""
+def bcc(radius_mm: float = DEFAULT_RADIUS_MM, aspect_ratio: float = 1.0) -> Cell:
+    """Body-centred cubic: box s x s x (aspect_ratio s), s = 2R/sqrt(3), with
+    octants at (0,0,0) and (s,s,s) touching along the body diagonal;
+    rho0 = pi sqrt(3)/8 = 0.6802."""
+    return Cell.bcc(radius_mm, aspect_ratio)
+
+
+def fcc(radius_mm: float = DEFAULT_RADIUS_MM, aspect_ratio: float = 1.0) -> Cell:
+    """Face-centred cubic: box s x s x (aspect_ratio s), s = sqrt(2) R, with
+    octants at (0,0,0), (s,s,0), (s,0,s), (0,s,s) touching along the face
+    diagonals; rho0 = pi/(3 sqrt(2)) = 0.7405."""
+    return Cell.fcc(radius_mm, aspect_ratio)
+
+
+def sc2(
+    radius_mm: float = DEFAULT_RADIUS_MM,
+    size_ratio: float = DEFAULT_SIZE_RATIO,
+    aspect_ratio: float = 1.0,
+) -> Cell:
+    """Two-size simple cubic (rock salt): large particles of radius R =
+    ``radius_mm`` and small ones of R/r, r = ``size_ratio`` in [1, 10]
+    (default the seed's 1.566), alternating over the eight corners of a box of
+    edge R + R/r; rho0 = (2 pi/3)(1 + r^3)/(1 + r)^3 = 0.60002 at r = 1.566.
+    Above r = 1 + sqrt(2) = 2.414 the large particles overlap across the face
+    diagonals: the simulation refuses such a cell (UnsupportedError)."""
+    return Cell.sc2(radius_mm, size_ratio, aspect_ratio)
+
+
+def custom(name: str, lengths_mm: Sequence[float], octants: Sequence[Sequence[Any]]) -> Cell:
+    """A cell from its box and particle pieces.
+
+    ``lengths_mm`` = (Lx, Ly, Lz) [mm], z the pressing direction. Each octant
+    is ``(corner, a, c)``: ``corner`` says at which box corner the spheroid's
+    centre sits, three booleans (True = the high end L_i of that axis) or a
+    string of three 0/1 digits ("011" = (0, Ly, Lz)); ``a`` and ``c`` [mm] are
+    its semi-axes along x, y and along z. Raises ValueError naming the bad
+    field (e.g. ``octants[1].corner``); overlaps are found by the simulation
+    (UnsupportedError).
+    """
+    if not isinstance(name, str):
+        raise ValueError(f"name = {name!r}: must be a string")
+    lengths = _numbers("lengths_mm", lengths_mm, 3, "three box edge lengths Lx, Ly, Lz [mm]")
+    octants = _plain(octants)
+    if isinstance(octants, (str, bytes)) or not isinstance(octants, Sequence):
+        raise ValueError(f"octants = {octants!r}: must be a list of (corner, a, c)")
+    pieces: list[Octant] = []
+    for k, octant in enumerate(octants):
+        if isinstance(octant, (str, bytes)) or not isinstance(octant, Sequence) or len(octant) != 3:
+            raise ValueError(f"octants[{k}] = {octant!r}: must be (corner, a, c)")
+        corner, a, c = (_plain(x) for x in octant)
+        pieces.append(
+            (
+                _corner(f"octants[{k}].corner", corner),
+                _number(f"octants[{k}].a", a),
+                _number(f"octants[{k}].c", c),
+            )
+        )
+    return Cell(name, (lengths[0], lengths[1], lengths[2]), pieces)
+
+
+def from_dict(data: Mapping[str, Any], default_name: str = "custom") -> Cell:
+    """A cell from the parsed content of a cell file (see the module docstring)."""
+    if not isinstance(data, Mapping):
+        raise ValueError(f"a cell must be a table (JSON object) with keys {', '.join(_FILE_KEYS)}")
+    _no_unknown_keys("", data, _FILE_KEYS)
+    for key in ("lengths_mm", "octants"):
+        if key not in data:
+            raise ValueError(f"{key}: missing")
+    octants = data["octants"]
+    if not isinstance(octants, list) or not octants:
+        raise ValueError(f"octants = {octants!r}: must be a non-empty list of tables with keys corner, a, c")
+    pieces = []
+    for k, o in enumerate(octants):
+        where = f"octants[{k}]"
+        if not isinstance(o, Mapping):
+            raise ValueError(f"{where} = {o!r}: must be a table with keys corner, a, c")
+        _no_unknown_keys(where + ".", o, _OCTANT_KEYS)
+        missing = [key for key in _OCTANT_KEYS if key not in o]
+        if missing:
+            raise ValueError(f"{where}.{missing[0]}: missing")
+        pieces.append((o["corner"], o["a"], o["c"]))
+    return custom(data.get("name", default_name), data["lengths_mm"], pieces)
+
+
+def from_file(path: str | Path) -> Cell:
+    """Reads a cell file, JSON (``.json``) or TOML (``.toml``); the schema is
+    in the module docstring. Raises ValueError naming the file and the bad
+    field."""
+    p = Path(path)
+    suffix = p.suffix.lower()
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as e:
+        raise ValueError(f"cell file {p}: cannot be read ({e.strerror or e})") from e
+    data: Any
+    if suffix == ".json":
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as e:
+            raise ValueError(f"cell file {p}: not valid JSON: {e}") from e
+    elif suffix == ".toml":
+        if sys.version_info < (3, 11):
+            raise ValueError(
+                f"cell file {p}: reading TOML needs Python >= 3.11 (tomllib); "
+                "this is Python 3.10: write the cell as JSON instead"
+            )
+        import tomllib
+
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as e:
+            raise ValueError(f"cell file {p}: not valid TOML: {e}") from e
+    else:
+        raise ValueError(f"cell file {p}: unknown suffix {p.suffix!r}: must be .json or .toml")
+    try:
+        return from_dict(data, default_name=p.stem)
+    except ValueError as e:
+        raise ValueError(f"cell file {p}: {e}") from e
+
+
+def to_dict(cell: Cell) -> dict[str, Any]:
+    """The cell in the cell-file schema (``from_dict(to_dict(c))`` rebuilds it)."""
+    return {
+        "name": cell.name,
+        "lengths_mm": list(cell.lengths_mm),
+        "octants": [{"corner": list(corner), "a": a, "c": c} for corner, a, c in cell.octants],
+    }
+
+
+def size_ratio_of(cell: Cell) -> float:
+    """Largest over smallest particle semi-axis a [-] (1 for one size)."""
+    sizes = [a for _, a, _ in cell.octants]
+    return max(sizes) / min(sizes)
+
+
+def aspect_ratio_of(cell: Cell) -> float | None:
+    """The particles' common c/a, None when they differ."""
+    ratios = [c / a for _, a, c in cell.octants]
+    if all(math.isclose(r, ratios[0], rel_tol=1e-12) for r in ratios):
+        return ratios[0]
+    return None
+
+
+def by_name(
+    name: str,
+    radius_mm: float = DEFAULT_RADIUS_MM,
+    aspect_ratio: float = 1.0,
+    size_ratio: float | None = None,
+) -> Cell:
+    """The preset called ``name`` (one of :data:`CELL_NAMES`). ``size_ratio``
+    applies to sc2 only (None: the default 1.566); given for another cell it
+    is an error."""
+    if size_ratio is not None and name != "sc2":
+        raise ValueError(f"size_ratio = {size_ratio:g}: applies to the sc2 cell only, not {name}")
     if name == "sc":
         return sc(radius_mm, aspect_ratio)
+    if name == "bcc":
+        return bcc(radius_mm, aspect_ratio)
+    if name == "fcc":
+        return fcc(radius_mm, aspect_ratio)
+    if name == "sc2":
+        r = DEFAULT_SIZE_RATIO if size_ratio is None else size_ratio
+        return sc2(radius_mm, r, aspect_ratio)
     raise ValueError(f"cell = {name!r}: must be one of {', '.join(CELL_NAMES)}")
 
 
-__all__ = ["CELL_NAMES", "DEFAULT_RADIUS_MM", "Cell", "by_name", "sc"]
+def _no_unknown_keys(where: str, data: Mapping[str, Any], known: tuple[str, ...]) -> None:
+    unknown = [k for k in data if k not in known]
+    if unknown:
+        raise ValueError(f"{where}{unknown[0]}: unknown key (the keys are {', '.join(known)})")
+
+
+def _plain(value: Any) -> Any:
+    """numpy arrays and scalars as Python lists and numbers."""
+    return value.tolist() if isinstance(value, (np.ndarray, np.generic)) else value
+
+
+def _number(name: str, value: Any) -> float:
+    # bool is an int in Python, but `a = true` is a mistake, not 1 mm.
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{name} = {value!r}: must be a number [mm]")
+    return float(value)
+
+
+def _numbers(name: str, value: Any, n: int, what: str) -> list[float]:
+    value = _plain(value)
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != n:
+        raise ValueError(f"{name} = {value!r}: must be {what}")
+    return [_number(f"{name}[{i}]", v) for i, v in enumerate(value)]
+
+
+def _corner(name: str, value: Any) -> Corner:
+    if isinstance(value, str) and len(value) == 3 and set(value) <= {"0", "1"}:
+        return (value[0] == "1", value[1] == "1", value[2] == "1")
+    if (
+        not isinstance(value, str)
+        and isinstance(value, Sequence)
+        and len(value) == 3
+        and all(isinstance(v, bool) for v in value)
+    ):
+        return (value[0], value[1], value[2])
+    raise ValueError(
+        f"{name} = {value!r}: must be three booleans (true = the high end of that axis) "
+        'or a string of three 0/1 digits such as "011"'
+    )
+
+
+__all__ = [
+    "CELL_NAMES",
+    "DEFAULT_RADIUS_MM",
+    "DEFAULT_SIZE_RATIO",
+    "Cell",
+    "Octant",
+    "aspect_ratio_of",
+    "bcc",
+    "by_name",
+    "custom",
+    "fcc",
+    "from_dict",
+    "from_file",
+    "sc",
+    "sc2",
+    "size_ratio_of",
+    "to_dict",
+]

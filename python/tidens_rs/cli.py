@@ -1,6 +1,7 @@
 """The ``tidens`` command.
 
-``tidens run`` presses one cell and writes DIR/curve.csv (streamed),
+``tidens run`` presses one cell (a preset, ``--cell``, or a cell file,
+``--cell-file``) and writes DIR/curve.csv (streamed),
 DIR/summary.json, DIR/fields_*.vtu with DIR/fields.pvd, and DIR/density.png;
 ``tidens demo`` runs the README's case (sc, Ti-6Al-4V at 1293 K, 10 MPa, to
 rho = 0.9).
@@ -14,7 +15,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from . import cells, materials
-from ._core import ConvergenceError, Material, TidensError, __version__
+from ._core import CONTACT_MODES, Cell, ConvergenceError, Material, TidensError, __version__
 from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings
 from .result import MARK_DENSITIES, Result
 
@@ -28,9 +29,14 @@ def _float_list(text: str) -> list[float]:
 
 def _add_run_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("cell")
-    g.add_argument("--cell", default="sc", choices=cells.CELL_NAMES, help="packing (default sc)")
-    g.add_argument("--aspect-ratio", type=float, default=1.0, help="spheroid c/a, c along the load (default 1)")
-    g.add_argument("--radius", type=float, default=cells.DEFAULT_RADIUS_MM, help="particle radius a [mm] (default 0.05; the curve does not depend on it)")
+    g.add_argument("--cell", choices=cells.CELL_NAMES, help="packing (default sc): sc, bcc, fcc, or sc2 (rock salt of two sizes)")
+    g.add_argument("--cell-file", type=Path, metavar="PATH", help="a cell described in a JSON or TOML file, instead of --cell (schema: python -c 'import tidens_rs.cells as c; help(c)')")
+    g.add_argument("--aspect-ratio", type=float, help="spheroid c/a, c along the load (default 1)")
+    g.add_argument("--radius", type=float, help="particle radius a [mm], the large one for sc2 (default 0.05; the curve does not depend on it)")
+    g.add_argument("--size-ratio", type=float, help=f"sc2 only: radius of the large particles over the small ones, in [1, 10] (default {cells.DEFAULT_SIZE_RATIO:g})")
+    g = p.add_argument_group("contact")
+    g.add_argument("--contact", choices=CONTACT_MODES, default=CONTACT_MODES[0], help="between particles: frictionless sliding (default) or tied once closed (no sliding)")
+    g.add_argument("--tied-planes", action="store_true", help="sensitivity option, not the default: tie particle surface nodes to the rigid die planes they touch (rough walls); by default the planes are frictionless mirror planes, as the symmetry of the packing requires")
     g = p.add_argument_group("material")
     g.add_argument("--material", choices=materials.PRESET_NAMES, help="preset (default ti64-creep-1293k)")
     g.add_argument("--C", dest="creep_c", type=float, help="Norton coefficient C [MPa^-n s^-1] (with --n, instead of --material)")
@@ -51,7 +57,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--max-steps", type=int, default=100_000, help="step limit (default 100000)")
     g = p.add_argument_group("output")
     g.add_argument("--out", type=Path, required=True, help="output directory")
-    g.add_argument("--vtu-densities", type=_float_list, help="comma-separated densities for VTU snapshots (default 0.6,0.7,0.8,0.9)")
+    g.add_argument("--vtu-densities", type=_float_list, help="comma-separated densities for VTU snapshots (default those of 0.6,0.7,0.8,0.9 above the cell's rho0)")
     g.add_argument("--vtu-times", type=_float_list, default=[], help="comma-separated times [s] for VTU snapshots")
     g.add_argument("--no-plot", action="store_true", help="do not write density.png")
     g.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -74,12 +80,34 @@ def _material(args: argparse.Namespace) -> Material:
     return m
 
 
+def _cell(args: argparse.Namespace) -> Cell:
+    if args.cell_file is not None:
+        if args.cell is not None:
+            raise ValueError("--cell and --cell-file exclude each other: give one")
+        for option, value in (("--radius", args.radius), ("--aspect-ratio", args.aspect_ratio), ("--size-ratio", args.size_ratio)):
+            if value is not None:
+                raise ValueError(f"{option} does not apply to --cell-file: the file gives the sizes")
+        return cells.from_file(args.cell_file)
+    name = args.cell or "sc"
+    if args.size_ratio is not None and name != "sc2":
+        raise ValueError(f"--size-ratio applies to --cell sc2 only, not --cell {name}")
+    return cells.by_name(
+        name,
+        args.radius if args.radius is not None else cells.DEFAULT_RADIUS_MM,
+        args.aspect_ratio if args.aspect_ratio is not None else 1.0,
+        args.size_ratio,
+    )
+
+
 def _fmt(value: float | None) -> str:
     return "-" if value is None else f"{value:.4g}"
 
 
 def _report(result: Result) -> None:
     s = result.summary()
+    cell, contact = s["cell"], s["contact"]
+    planes = ", tied planes (sensitivity option)" if contact["tied_planes"] else ""
+    print(f"cell {cell['name']} ({len(cell['octants'])} octant(s), rho0 {cell['rho0_exact']:.5f}), {contact['mode']} contact{planes}")
     print(f"status: {s['status']}   final density {s['final_density']:.4f} at t = {s['final_time_s']:.4g} s")
     print(f"{'rho':>5} {'t FE [s]':>12} {'err est [s]':>12} {'t continuum [s]':>16}")
     for r in MARK_DENSITIES:
@@ -98,11 +126,13 @@ def _run(args: argparse.Namespace) -> int:
     if args.until_density is None and args.until_time is None:
         raise ValueError("give --until-density, --until-time or both")
     case = Case(
-        cell=cells.by_name(args.cell, args.radius, args.aspect_ratio),
+        cell=_cell(args),
         material=_material(args),
         stress_mpa=args.stress,
         knockdown=args.knockdown,
         ramp_time_s=args.ramp_time,
+        contact=args.contact,
+        tied_planes=args.tied_planes,
         solver=SolverSettings(
             mesh_level=args.mesh_level,
             tolerance=args.tolerance,
@@ -110,7 +140,8 @@ def _run(args: argparse.Namespace) -> int:
             max_steps=args.max_steps,
         ),
     )
-    densities = args.vtu_densities if args.vtu_densities is not None else list(MARK_DENSITIES)
+    # The default snapshot densities start at 0.6, below rho0 of the denser packings.
+    densities = args.vtu_densities if args.vtu_densities is not None else [r for r in MARK_DENSITIES if r > case.cell.rho0]
     if args.until_density is not None:
         densities = [r for r in densities if r <= args.until_density]
     out: Path = args.out

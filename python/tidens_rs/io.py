@@ -97,8 +97,9 @@ def write_summary(path: Path, summary: dict[str, Any]) -> None:
 
 def write_vtu(path: Path, snapshot: Snapshot) -> Path:
     """Writes one snapshot: hexahedra in the current configuration with
-    displacement and contact force at the nodes, von Mises stress, mean
-    stress and equivalent plastic strain per element."""
+    displacement, contact force (of the rigid planes) and particle-particle
+    contact pressure at the nodes; von Mises stress, mean stress, equivalent
+    plastic strain and the particle index per element."""
     path.parent.mkdir(parents=True, exist_ok=True)
     f = snapshot.fields
     mesh = meshio.Mesh(
@@ -107,11 +108,13 @@ def write_vtu(path: Path, snapshot: Snapshot) -> Path:
         point_data={
             "displacement_mm": f["displacement"],
             "contact_force_N": f["contact_force"],
+            "contact_pressure_MPa": f["contact_pressure"],
         },
         cell_data={
             "von_mises_mpa": [f["von_mises"]],
             "mean_stress_mpa": [f["mean_stress"]],
             "eqps": [f["eqps"]],
+            "particle": [f["particle"]],
         },
     )
     meshio.write(path, mesh, file_format="vtu")

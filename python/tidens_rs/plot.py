@@ -26,6 +26,10 @@ def plot_density(result: Result) -> Figure:
     rho_end = float(max(rho[-1], c.cell.rho0 + 1e-3))
     tc, rc = result.continuum().curve(min(rho_end, 0.999))
     label = f"FE, {c.cell.name}, level {c.solver.mesh_level}"
+    if len(c.cell.octants) > 1:
+        label += f", {c.contact} contact"
+    if c.tied_planes:
+        label += ", tied planes"
     for ax, log in zip(axes, (False, True)):
         keep = t > 0 if log else np.ones_like(t, dtype=bool)
         ax.plot(t[keep], rho[keep], "-", color="C0", label=label)

@@ -9,8 +9,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import io
-from ._core import __version__
+from . import cells, io
+from ._core import Cell, __version__
 from .continuum import ContinuumModel
 from .materials import name_of
 from .snapshot import Snapshot
@@ -35,6 +35,20 @@ def interpolate_time(time_s: np.ndarray, rho: np.ndarray, target: float) -> floa
     r0, r1 = rho[k - 1], rho[k]
     w = (target - r0) / (r1 - r0) if r1 > r0 else 1.0
     return float(time_s[k - 1] + w * (time_s[k] - time_s[k - 1]))
+
+
+def _cell_summary(cell: Cell) -> dict[str, Any]:
+    """The cell block of the summary: the cell-file schema (name, lengths_mm,
+    octants with corner, a, c), plus aspect_ratio (the particles' common c/a,
+    None if they differ), size_ratio (largest over smallest particle, for
+    cells of more than one size and for sc2) and rho0_exact."""
+    out = cells.to_dict(cell)
+    out["aspect_ratio"] = cells.aspect_ratio_of(cell)
+    r = cells.size_ratio_of(cell)
+    if cell.name == "sc2" or r > 1.0 + 1e-12:
+        out["size_ratio"] = r
+    out["rho0_exact"] = cell.rho0
+    return out
 
 
 @dataclass
@@ -113,19 +127,14 @@ class Result:
         reached = {k: v for k, v in times.items() if v is not None}
         errors = {f"{r:g}": self.time_error_at_density(r) for r in marks}
         model = self.continuum()
-        continuum_times = {f"{r:g}": float(model.time_to_density(r)[0]) for r in marks}
+        # The mesh starts a little below the exact rho0 the model starts at.
+        continuum_times = {f"{r:g}": float(model.time_to_density(r)[0]) for r in marks if r > model.rho0}
         last = {k: float(v[-1]) for k, v in self.curve.items()}
-        lx, ly, lz = c.cell.lengths_mm
         return {
             "tidens_version": __version__,
             "status": self.status,
             "message": self.message,
-            "cell": {
-                "name": c.cell.name,
-                "lengths_mm": [lx, ly, lz],
-                "aspect_ratio": lz / lx,
-                "rho0_exact": c.cell.rho0,
-            },
+            "cell": _cell_summary(c.cell),
             "material": {
                 "preset": name_of(m),
                 "creep_c": m.creep_c,
@@ -137,6 +146,12 @@ class Result:
                 "stress_mpa": c.stress_mpa,
                 "knockdown": c.knockdown,
                 "ramp_time_s": c.ramp_time_s,
+            },
+            "contact": {
+                "mode": c.contact,
+                "tied_planes": c.tied_planes,
+                "penalty_factor": c.solver.contact_penalty_factor,
+                "penetration_tolerance": c.solver.penetration_tolerance,
             },
             "solver": c.solver.as_dict(),
             "mesh_level": c.solver.mesh_level,

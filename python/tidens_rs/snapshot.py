@@ -10,8 +10,11 @@ import numpy as np
 @dataclass(frozen=True)
 class Snapshot:
     """Fields at one converged step: ``points`` (N,3) current coordinates [mm],
-    ``displacement`` (N,3) [mm], ``contact_force`` (N,3) [N], ``cells`` (E,8)
-    hexahedra, ``von_mises`` and ``mean_stress`` (E,) [MPa], ``eqps`` (E,)."""
+    ``displacement`` (N,3) [mm], ``contact_force`` (N,3) force of the rigid
+    planes [N], ``contact_pressure`` (N,) particle-particle contact pressure
+    [MPa], ``cells`` (E,8) hexahedra, ``particle`` (E,) the particle (octant
+    index) of each element, ``von_mises`` and ``mean_stress`` (E,) [MPa],
+    ``eqps`` (E,)."""
 
     label: str
     time_s: float

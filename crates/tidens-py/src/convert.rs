@@ -107,11 +107,20 @@ fn rows_array<'py, T: numpy::Element, const N: usize>(
 }
 
 /// The fields of the last converged state as a dict of numpy arrays.
-pub(crate) fn fields_dict<'py>(py: Python<'py>, fields: Fields) -> PyResult<Bound<'py, PyDict>> {
+/// `particle` is the particle index of each element.
+pub(crate) fn fields_dict<'py>(
+    py: Python<'py>,
+    fields: Fields,
+    particle: Vec<i64>,
+) -> PyResult<Bound<'py, PyDict>> {
     let dict = PyDict::new(py);
     dict.set_item("points", rows_array(py, fields.points)?)?;
     dict.set_item("displacement", rows_array(py, fields.displacement)?)?;
     dict.set_item("contact_force", rows_array(py, fields.contact_force)?)?;
+    dict.set_item(
+        "contact_pressure",
+        PyArray1::from_vec(py, fields.contact_pressure),
+    )?;
     // Node indices never come near i64::MAX: the cast cannot wrap.
     let cells: Vec<[i64; 8]> = fields
         .cells
@@ -119,6 +128,7 @@ pub(crate) fn fields_dict<'py>(py: Python<'py>, fields: Fields) -> PyResult<Boun
         .map(|c| c.map(|node| node as i64))
         .collect();
     dict.set_item("cells", rows_array(py, cells)?)?;
+    dict.set_item("particle", PyArray1::from_vec(py, particle))?;
     let element = fields.element;
     dict.set_item("von_mises", PyArray1::from_vec(py, element.von_mises))?;
     dict.set_item("mean_stress", PyArray1::from_vec(py, element.mean_stress))?;

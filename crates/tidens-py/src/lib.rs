@@ -37,6 +37,13 @@ mod _core {
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
         // The material preset names, in the order of DESIGN.md's table.
         m.add("PRESET_NAMES", Preset::ALL.map(Preset::name).to_vec())?;
+        // The `contact` choices of Simulation, the default first.
+        let modes: Vec<&str> = super::simulation::CONTACT_MODES
+            .iter()
+            .map(|(name, _)| *name)
+            .collect();
+        m.add("CONTACT_MODES", modes)?;
+        m.add("DEFAULT_SIZE_RATIO", tidens_solver::DEFAULT_SIZE_RATIO)?;
         Ok(())
     }
 }

@@ -14,13 +14,47 @@ use crate::convert::{
 };
 use crate::errors::{Phase, mesh_level_error, parameter_error, poisoned, solver_error};
 use crate::material::PyMaterial;
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 use tidens_solver::{
-    CurvePoint, LoadHistory, MeshOptions, NewtonSettings, RunStats, Scene, Settings, Simulation,
-    Status,
+    ContactMode, ContactOptions, CurvePoint, LoadHistory, MeshOptions, NewtonSettings, RunStats,
+    Scene, Settings, Simulation, Status,
 };
+
+/// The Python names of the contact modes, in the order of `CONTACT_MODES`.
+pub(crate) const CONTACT_MODES: [(&str, ContactMode); 2] = [
+    ("frictionless", ContactMode::Frictionless),
+    ("tied", ContactMode::Tied),
+];
+
+/// The contact mode called `name`, or a ValueError listing the choices.
+fn contact_mode(name: &str) -> PyResult<ContactMode> {
+    CONTACT_MODES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|&(_, mode)| mode)
+        .ok_or_else(|| {
+            let choices: Vec<&str> = CONTACT_MODES.iter().map(|(n, _)| *n).collect();
+            PyValueError::new_err(format!(
+                "contact = '{name}': must be one of {}",
+                choices.join(", ")
+            ))
+        })
+}
+
+/// The particle index of every element of a scene (-1 for an element of no
+/// particle, as in the verification blocks).
+fn element_particles(scene: &Scene) -> Vec<i64> {
+    let mut owner = vec![-1; scene.mesh.elements.len()];
+    for (k, p) in scene.particles.iter().enumerate() {
+        let (first, count) = p.elements;
+        // Particle counts are tiny: the cast cannot wrap.
+        owner[first..first + count].fill(k as i64);
+    }
+    owner
+}
 
 /// What readers on other threads see: refreshed after every step.
 struct Progress {
@@ -60,7 +94,14 @@ impl Progress {
 /// knockdown * stress (die-wall friction, knockdown in (0, 1]). Stop: at
 /// relative density until_density and/or time until_time_s [s] (at least one).
 /// Mesh: mesh_level (1 coarsest; each level refines by ~sqrt(2)) and grading
-/// (element-size ratio toward the contacts, in [1, 10]). Steps: tolerance is
+/// (element-size ratio toward the contacts, in [1, 10]). Contact between
+/// particles: contact = "frictionless" (sliding, the default) or "tied" (no
+/// sliding once closed); tied_planes = True ties surface nodes that touch a
+/// rigid die plane (a sensitivity option, not the default: the mirror planes
+/// are frictionless); contact_penalty_factor in [0.01, 1e4] (penalty
+/// stiffness over E/h, h the mean surface element size); penetration_tolerance
+/// in [1e-8, 1e-2], the largest penetration of a converged step as a fraction
+/// of the largest particle radius. Steps: tolerance is
 /// the target relative time error in [1e-6, 0.5]; max_strain_increment the
 /// largest plastic strain increment per step in (0, 2]; dt_initial_s, dt_max_s
 /// [s]; max_steps; time_targets_s [s], times a step must end on; Newton:
@@ -76,6 +117,8 @@ pub struct PySimulation {
     lengths: [f64; 3],
     node_count: usize,
     element_count: usize,
+    /// The particle index of each element (the scene's particles).
+    element_particle: Vec<i64>,
 }
 
 impl PySimulation {
@@ -122,6 +165,10 @@ impl PySimulation {
         time_targets_s = Vec::new(),
         newton_max_iterations = 25,
         newton_residual_tolerance = 1e-6,
+        contact = "frictionless",
+        tied_planes = false,
+        contact_penalty_factor = 10.0,
+        penetration_tolerance = 1e-4,
     ))]
     // The Python keyword arguments: one per solver knob.
     #[allow(clippy::too_many_arguments)]
@@ -144,6 +191,10 @@ impl PySimulation {
         time_targets_s: Vec<f64>,
         newton_max_iterations: i64,
         newton_residual_tolerance: f64,
+        contact: &str,
+        tied_planes: bool,
+        contact_penalty_factor: f64,
+        penetration_tolerance: f64,
     ) -> PyResult<Self> {
         if until_density.is_none() && until_time_s.is_none() {
             return Err(pyo3::exceptions::PyValueError::new_err(
@@ -170,6 +221,12 @@ impl PySimulation {
                 residual_tolerance: newton_residual_tolerance,
                 ..NewtonSettings::default()
             },
+            contact: ContactOptions {
+                mode: contact_mode(contact)?,
+                tied_planes,
+                penalty_factor: contact_penalty_factor,
+                penetration_tolerance,
+            },
             ..Settings::new(LoadHistory {
                 stress: stress_mpa,
                 knockdown,
@@ -183,19 +240,20 @@ impl PySimulation {
         let cell = cell.get().inner.clone();
         let material = material.get().inner;
         let options = MeshOptions { level, grading };
-        let sim = py
+        let (sim, element_particle) = py
             .detach(move || {
                 let scene = Scene::from_cell(&cell, &options)?;
-                Simulation::new(&scene, material, settings)
+                let sim = Simulation::new(&scene, material, settings)?;
+                Ok((sim, element_particles(&scene)))
             })
             .map_err(|e| solver_error(e, Phase::Setup))?;
-        let body = sim.body();
-        let (node_count, element_count) = (body.nodes().len(), body.elements().len());
+        let (node_count, element_count) = (sim.body().nodes().len(), element_particle.len());
         Ok(Self {
             progress: Mutex::new(Progress::of(&sim)),
             lengths: sim.lengths(),
             node_count,
             element_count,
+            element_particle,
             sim: Mutex::new(sim),
         })
     }
@@ -287,9 +345,12 @@ impl PySimulation {
 
     /// Fields of the last converged state, numpy arrays: points (N,3) current
     /// coordinates [mm], displacement (N,3) [mm], contact_force (N,3) force of
-    /// the rigid planes on each node [N], cells (E,8) int64 node indices (VTK
-    /// hexahedron order), and per element von_mises [MPa], mean_stress (tension
-    /// positive) [MPa] and eqps (equivalent plastic strain) [-].
+    /// the rigid planes on each node [N], contact_pressure (N,) particle-
+    /// particle contact pressure [MPa] (0 where none), cells (E,8) int64 node
+    /// indices (VTK hexahedron order), particle (E,) int64 the index of the
+    /// particle (octant of the cell) each element belongs to, and per element
+    /// von_mises [MPa], mean_stress (tension positive) [MPa] and eqps
+    /// (equivalent plastic strain) [-].
     ///
     /// Waits (GIL released) for a step in progress on another thread to end.
     fn fields<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
@@ -299,7 +360,7 @@ impl PySimulation {
                 .map(|sim| sim.fields())
                 .map_err(|_| poisoned())
         })?;
-        fields_dict(py, fields)
+        fields_dict(py, fields, self.element_particle.clone())
     }
 
     /// Run totals: steps, newton_iterations, rejected_steps, failed_attempts,
