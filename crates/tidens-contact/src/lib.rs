@@ -122,6 +122,34 @@ impl ContactEvaluation {
     pub fn max_penetration(&self) -> f64 {
         self.terms.iter().map(|t| t.penetration).fold(0.0, f64::max)
     }
+
+    /// Largest violation of the contact conditions [mm]: a penetration, or
+    /// a gap at a node that still carries pressure (a multiplier left from
+    /// an earlier state). The augmented Lagrangian iterates until it is small.
+    pub fn max_violation(&self) -> f64 {
+        self.terms
+            .iter()
+            .map(|t| {
+                if t.pressure > 0.0 {
+                    t.penetration.abs()
+                } else {
+                    t.penetration
+                }
+            })
+            .fold(0.0, f64::max)
+    }
+}
+
+/// The 15 coordinates of a slave point and a facet, in term order.
+fn pack(p: &[f64; 3], q: &[[f64; 3]; 4]) -> SVector<f64, TERM_DOFS> {
+    let mut v = SVector::<f64, TERM_DOFS>::zeros();
+    for i in 0..3 {
+        v[i] = p[i];
+        for a in 0..4 {
+            v[3 + 3 * a + i] = q[a][i];
+        }
+    }
+    v
 }
 
 fn point(x: &[f64], node: usize) -> [f64; 3] {
@@ -264,12 +292,38 @@ impl ParticleContact {
     /// on the facet's bilinear patch, extended beyond its edges if need be),
     /// so the residual stays smooth while Newton iterates: switching facets
     /// between iterations would make it jump.
+    ///
+    /// A node keeps the facet of the previous step while its projection stays
+    /// within that facet grown by a tenth of its size: choosing afresh every
+    /// step would let a node on the edge between two facets hop between them
+    /// from step to step (their patches differ slightly beyond their edges),
+    /// and the two equilibria it hops between make the piston chatter.
     pub fn pair(&mut self, x: &[f64]) {
-        self.pairing = self
-            .surfaces
-            .iter()
-            .map(|s| vec![None; s.nodes.len()])
+        let keep = |s: usize, k: usize, m: usize, facet: usize| {
+            let p = point(x, self.surfaces[s].nodes[k]);
+            let q = self.surfaces[m].quads[facet].map(|n| point(x, n));
+            let xi = project(&p, &q);
+            let inside = xi[0].abs().max(xi[1].abs()) <= 1.1;
+            let near = penetration(&pack(&p, &q), xi) > -self.settings.search_distance;
+            inside && near
+        };
+        let pairing: Vec<Vec<Option<(usize, usize)>>> = (0..self.surfaces.len())
+            .map(|s| {
+                (0..self.surfaces[s].nodes.len())
+                    .map(|k| {
+                        match self
+                            .pairing
+                            .get(s)
+                            .and_then(|v| v.get(k).copied().flatten())
+                        {
+                            Some((m, facet)) if keep(s, k, m, facet) => Some((m, facet)),
+                            _ => None,
+                        }
+                    })
+                    .collect()
+            })
             .collect();
+        self.pairing = pairing;
         self.pair_unpaired(x);
     }
 

@@ -81,6 +81,24 @@ fn main() -> Result<(), SolverError> {
     let monotone = c
         .windows(2)
         .all(|w| w[1].rel_density >= w[0].rel_density - 1e-9);
+    for w in c
+        .windows(2)
+        .filter(|w| !(w[1].rel_density >= w[0].rel_density - 1e-9))
+    {
+        println!(
+            "  density fell at step {}: t {:.4e} -> {:.4e}, rho {:.7} -> {:.7} (dt {:.2e}, volume {:.6e} -> {:.6e}, U {:.6e} -> {:.6e})",
+            w[1].step,
+            w[0].time,
+            w[1].time,
+            w[0].rel_density,
+            w[1].rel_density,
+            w[1].dt,
+            w[0].particle_volume,
+            w[1].particle_volume,
+            w[0].piston_displacement,
+            w[1].piston_displacement
+        );
+    }
     println!(
         "  max penetration {pen:.3e} mm = {:.2e} R, monotone {monotone}",
         pen / scene.radius

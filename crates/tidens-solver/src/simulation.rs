@@ -624,9 +624,11 @@ impl Simulation {
         // end of the step, so the time it takes is off by half the step times
         // the change of the log of the rate over it, weighted by
         // (sigma/sigma_max)^n (during the ramp a time shift counts at the
-        // reduced load). A step whose strain increment is within the noise
-        // that the Newton tolerance leaves says nothing of the rate.
-        let moved = (rate * dt).abs() > 1e-9;
+        // reduced load). A step of less than 1e-6 strain says nothing
+        // reliable of the rate (the Newton tolerance leaves noise of 1e-10 or
+        // so, and contact events make it jumpy): it lets the step grow, and
+        // what it could get wrong is bounded by its own tiny strain.
+        let moved = (rate * dt).abs() > 1e-6;
         let dln = match self.last_rate {
             Some(r0) if moved && r0 > 0.0 && rate > 0.0 => (r0 / rate).ln() * weight,
             _ => 0.0,
@@ -652,6 +654,18 @@ impl Simulation {
         self.f_int = s.eval.f_int;
         self.fields = s.eval.body.fields();
         if let Some(c) = self.contact.as_mut() {
+            // Uzawa update once per step: the next step starts from this
+            // step's pressures, which keeps penetrations small and the
+            // contact law smooth in time.
+            let x: Vec<f64> = self
+                .body
+                .nodes()
+                .iter()
+                .flatten()
+                .zip(&self.u)
+                .map(|(p, du)| p + du)
+                .collect();
+            c.augment(&x, &s.eval.contact);
             c.tie_closed(&s.eval.contact);
         }
         self.contact_eval = s.eval.contact;
@@ -865,7 +879,11 @@ impl Simulation {
                         .map_err(|e| fail(e, iterations))?;
                     continue;
                 }
-                let contact_penetration = eval.contact.max_penetration();
+                // The multipliers take each converged step's pressures (see
+                // `accept_or_reject`), so the penetration of a step is only
+                // the pressure change over it divided by the penalty; the
+                // augmentation loop here is for steps where that is too much.
+                let contact_penetration = eval.contact.max_violation();
                 if contact_penetration <= self.penetration_tol {
                     break Ok(Solved {
                         u,
