@@ -36,6 +36,12 @@ class SolverSettings:
         error of t(0.8) and t(0.9) on the sc cell is about 0.3 %.
     grading
         Element-size ratio toward the contact points (1 = uniform).
+    element
+        ``hex8``: the 8-node mean-dilatation hexahedron (default); ``tet10``:
+        the 10-node tetrahedron with one pressure, 6 per hexahedron of the
+        same level with mid-edge nodes on the true surface (single-particle
+        cells and blocks; level L in tet10 has as many dofs as level L + 2 in
+        hex8).
     max_strain_increment
         Largest equivalent plastic strain increment per step at any Gauss
         point (a robustness limit).
@@ -67,6 +73,7 @@ class SolverSettings:
     mesh_level: int = DEFAULT_MESH_LEVEL
     tolerance: float = DEFAULT_TOLERANCE
     grading: float = 1.0
+    element: str = "hex8"
     max_strain_increment: float = 0.2
     dt_initial_s: float | None = None
     dt_max_s: float = math.inf
@@ -136,6 +143,7 @@ class Case:
             until_time_s=until_time_s,
             mesh_level=s.mesh_level,
             grading=s.grading,
+            element=s.element,
             tolerance=s.tolerance,
             max_strain_increment=s.max_strain_increment,
             dt_initial_s=s.dt_initial_s,

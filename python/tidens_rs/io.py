@@ -104,7 +104,7 @@ def write_vtu(path: Path, snapshot: Snapshot) -> Path:
     f = snapshot.fields
     mesh = meshio.Mesh(
         points=f["points"],
-        cells=[("hexahedron", f["cells"])],
+        cells=[(str(f["cell_type"]), f["cells"])],
         point_data={
             "displacement_mm": f["displacement"],
             "contact_force_N": f["contact_force"],

@@ -122,12 +122,19 @@ pub(crate) fn fields_dict<'py>(
         PyArray1::from_vec(py, fields.contact_pressure),
     )?;
     // Node indices never come near i64::MAX: the cast cannot wrap.
-    let cells: Vec<[i64; 8]> = fields
-        .cells
+    let per_cell = fields.connectivity.first().map_or(8, |c| c.len());
+    let flat: Vec<i64> = fields
+        .connectivity
         .iter()
-        .map(|c| c.map(|node| node as i64))
+        .flatten()
+        .map(|&n| n as i64)
         .collect();
-    dict.set_item("cells", rows_array(py, cells)?)?;
+    let count = fields.connectivity.len();
+    dict.set_item(
+        "cells",
+        PyArray1::from_vec(py, flat).reshape([count, per_cell])?,
+    )?;
+    dict.set_item("cell_type", fields.cell_type)?;
     dict.set_item("particle", PyArray1::from_vec(py, particle))?;
     let element = fields.element;
     dict.set_item("von_mises", PyArray1::from_vec(py, element.von_mises))?;

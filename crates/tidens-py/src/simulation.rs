@@ -19,8 +19,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 use tidens_solver::{
-    ContactMode, ContactOptions, CurvePoint, LoadHistory, MeshOptions, NewtonSettings, RunStats,
-    Scene, Settings, Simulation, Status,
+    ContactMode, ContactOptions, CurvePoint, ElementKind, LoadHistory, MeshOptions, NewtonSettings,
+    RunStats, Scene, Settings, Simulation, Status,
 };
 
 /// The Python names of the contact modes, in the order of `CONTACT_MODES`.
@@ -53,7 +53,22 @@ fn element_particles(scene: &Scene) -> Vec<i64> {
         // Particle counts are tiny: the cast cannot wrap.
         owner[first..first + count].fill(k as i64);
     }
-    owner
+    match scene.element() {
+        ElementKind::Hex8 => owner,
+        // Tetrahedron 6 e + k is a piece of hexahedron e.
+        ElementKind::Tet10 => owner.iter().flat_map(|&o| [o; 6]).collect(),
+    }
+}
+
+/// The element kind called `name`.
+fn element_kind(name: &str) -> PyResult<ElementKind> {
+    match name {
+        "hex8" => Ok(ElementKind::Hex8),
+        "tet10" => Ok(ElementKind::Tet10),
+        _ => Err(PyValueError::new_err(format!(
+            "element = '{name}': must be one of hex8, tet10"
+        ))),
+    }
 }
 
 /// What readers on other threads see: refreshed after every step.
@@ -157,6 +172,7 @@ impl PySimulation {
         until_time_s = None,
         mesh_level = 3,
         grading = 1.0,
+        element = "hex8",
         tolerance = 0.01,
         max_strain_increment = 0.2,
         dt_initial_s = None,
@@ -183,6 +199,7 @@ impl PySimulation {
         until_time_s: Option<f64>,
         mesh_level: i64,
         grading: f64,
+        element: &str,
         tolerance: f64,
         max_strain_increment: f64,
         dt_initial_s: Option<f64>,
@@ -240,9 +257,10 @@ impl PySimulation {
         let cell = cell.get().inner.clone();
         let material = material.get().inner;
         let options = MeshOptions { level, grading };
+        let kind = element_kind(element)?;
         let (sim, element_particle) = py
             .detach(move || {
-                let scene = Scene::from_cell(&cell, &options)?;
+                let scene = Scene::from_cell(&cell, &options)?.with_element(kind)?;
                 let sim = Simulation::new(&scene, material, settings)?;
                 Ok((sim, element_particles(&scene)))
             })
@@ -346,8 +364,8 @@ impl PySimulation {
     /// Fields of the last converged state, numpy arrays: points (N,3) current
     /// coordinates [mm], displacement (N,3) [mm], contact_force (N,3) force of
     /// the rigid planes on each node [N], contact_pressure (N,) particle-
-    /// particle contact pressure [MPa] (0 where none), cells (E,8) int64 node
-    /// indices (VTK hexahedron order), particle (E,) int64 the index of the
+    /// particle contact pressure [MPa] (0 where none), cells (E,8) or (E,10) int64
+    /// node indices (VTK order), cell_type "hexahedron" or "tetra10", particle (E,) int64 the index of the
     /// particle (octant of the cell) each element belongs to, and per element
     /// von_mises [MPa], mean_stress (tension positive) [MPa] and eqps
     /// (equivalent plastic strain) [-].

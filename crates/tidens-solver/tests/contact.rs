@@ -121,8 +121,16 @@ fn contact_force_balances_the_piston_force_at_every_step() {
     let mut last_rho = 0.0;
     while sim.status() == Status::Running {
         let p = sim.advance().unwrap().clone();
-        assert!(p.rel_density >= last_rho - 1e-12, "density fell at t = {}", p.time);
-        assert!(p.max_penetration < 1e-4 * 0.05, "penetration {:e} mm", p.max_penetration);
+        assert!(
+            p.rel_density >= last_rho - 1e-12,
+            "density fell at t = {}",
+            p.time
+        );
+        assert!(
+            p.max_penetration < 1e-4 * 0.05,
+            "penetration {:e} mm",
+            p.max_penetration
+        );
         last_rho = p.rel_density;
         let piston = p.cell_stress * area;
         let forces = sim.particle_forces(&scene);
