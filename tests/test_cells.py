@@ -209,6 +209,10 @@ def test_every_packing_densifies_with_contact_pressure_and_no_penetration(
     # Every particle carries contact pressure on some of its nodes.
     cells_of = [f["cells"][f["particle"] == k] for k in range(len(cell.octants))]
     assert all(f["contact_pressure"][np.unique(c)].max() > 0.0 for c in cells_of)
+    # The curve counts the pressed nodes (a node pressed on two particles
+    # counts twice, the field shows its larger pressure once).
+    pressed_nodes = np.count_nonzero(f["contact_pressure"] > 0.0)
+    assert pressed_nodes > 0 and r.curve["particle_contacts"][-1] >= pressed_nodes
     s = r.summary()
     assert len(s["cell"]["octants"]) == len(cell.octants)
     assert s["contact"]["mode"] == "frictionless" and s["contact"]["tied_planes"] is False

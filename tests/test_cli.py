@@ -85,7 +85,7 @@ def test_bcc_run_writes_contact_pressure_and_particles(tmp_path: Path) -> None:
                  "--out", str(out), *QUICK])
     assert code == 0
     mesh = meshio.read(out / "fields_final.vtu")
-    pressure = mesh.point_data["contact_pressure_MPa"]
+    pressure = mesh.point_data["contact_pressure_mpa"]
     assert pressure.shape == (len(mesh.points),) and pressure.max() > 0.0 and pressure.min() >= 0.0
     particle = mesh.cell_data["particle"][0]
     assert set(particle.tolist()) == {0, 1}

@@ -34,10 +34,10 @@ the core: lengths and semi-axes in [1e-6, 1e3] mm, c/a in [0.2, 5], each
 octant inside the box (a <= Lx, Ly; c <= Lz). Errors name the field, e.g.
 ``octants[1].a``. Particles that overlap are found when the cell is meshed:
 :class:`tidens_rs.Simulation` (so :meth:`tidens_rs.Case.run`) raises
-:class:`tidens_rs.UnsupportedError`. The check allows a relative 1e-9 only,
-so give the lengths of a cell whose particles touch to full precision (the
-bcc box edge 2R/sqrt(3) as 0.05773502691896258 for R = 0.05, not 0.057735),
-or round them up. Reading TOML needs Python >= 3.11
+:class:`tidens_rs.UnsupportedError`. Both checks allow a relative 1e-6 of
+the spheroid's level function (about 5e-7 of a distance), so lengths of a
+cell whose particles touch need seven significant digits (the bcc box edge
+2R/sqrt(3) as 0.05773503 for R = 0.05, not 0.057735), or round them up. Reading TOML needs Python >= 3.11
 (``tomllib``); on 3.10 use JSON.
 """
 
@@ -92,11 +92,11 @@ def sc2(
     aspect_ratio: float = 1.0,
 ) -> Cell:
     """Two-size simple cubic (rock salt): large particles of radius R =
-    ``radius_mm`` and small ones of R/r, r = ``size_ratio`` in [1, 10]
-    (default the seed's 1.566), alternating over the eight corners of a box of
-    edge R + R/r; rho0 = (2 pi/3)(1 + r^3)/(1 + r)^3 = 0.60002 at r = 1.566.
-    Above r = 1 + sqrt(2) = 2.414 the large particles overlap across the face
-    diagonals: the simulation refuses such a cell (UnsupportedError)."""
+    ``radius_mm`` and small ones of R/r, r = ``size_ratio`` in
+    [1, 1 + sqrt(2) = 2.414] (default the seed's 1.566), alternating over the
+    eight corners of a box of edge R + R/r; rho0 = (2 pi/3)(1 + r^3)/(1 + r)^3
+    = 0.60002 at r = 1.566. Above 1 + sqrt(2) the large particles would overlap
+    across the face diagonals, so such a ratio is a ValueError."""
     return Cell.sc2(radius_mm, size_ratio, aspect_ratio)
 
 

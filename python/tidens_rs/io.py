@@ -29,6 +29,7 @@ CURVE_COLUMNS = (
     "particle_volume_mm3",
     "time_error_s",
     "contacts",
+    "particle_contacts",
     "max_penetration_mm",
 )
 
@@ -108,7 +109,7 @@ def write_vtu(path: Path, snapshot: Snapshot) -> Path:
         point_data={
             "displacement_mm": f["displacement"],
             "contact_force_N": f["contact_force"],
-            "contact_pressure_MPa": f["contact_pressure"],
+            "contact_pressure_mpa": f["contact_pressure"],
         },
         cell_data={
             "von_mises_mpa": [f["von_mises"]],

@@ -7,6 +7,9 @@ use crate::{BoundaryFace, FaceKind, HexMesh, TetBoundaryFace, TetMesh};
 /// it swaps the roles of xi and eta (corner 1 <-> 3, 5 <-> 7).
 const REVERSE_HEX: [usize; 8] = [0, 3, 2, 1, 4, 7, 6, 5];
 
+/// Reverses a quadrilateral: corners 0-3-2-1.
+const REVERSE_QUAD: [usize; 4] = [0, 3, 2, 1];
+
 impl HexMesh {
     /// Mirror image: `x_i -> -x_i` for each axis with `flip[i]`.
     ///
@@ -15,60 +18,30 @@ impl HexMesh {
     /// normal still points out of the body. `FaceKind::Plane::high` is toggled on
     /// flipped axes. Node and element numbering are unchanged.
     pub fn mirrored(&self, flip: [bool; 3]) -> HexMesh {
-        // `0.0 - v` rather than `-v` keeps coordinate 0 as +0.0.
-        let nodes = self
-            .nodes
-            .iter()
-            .map(|p| std::array::from_fn(|i| if flip[i] { 0.0 - p[i] } else { p[i] }))
-            .collect();
-        let odd = flip.iter().filter(|&&f| f).count() % 2 == 1;
-        let elements = if odd {
-            self.elements
-                .iter()
-                .map(|el| REVERSE_HEX.map(|i| el[i]))
-                .collect()
-        } else {
-            self.elements.clone()
-        };
-        let boundary = self
-            .boundary
-            .iter()
-            .map(|f| {
-                let nodes = if odd {
-                    [f.nodes[0], f.nodes[3], f.nodes[2], f.nodes[1]]
-                } else {
-                    f.nodes
-                };
-                let kind = match f.kind {
-                    FaceKind::Plane { axis, high } => FaceKind::Plane {
-                        axis,
-                        high: high ^ flip[axis],
-                    },
-                    FaceKind::Curved => FaceKind::Curved,
-                };
-                BoundaryFace {
-                    nodes,
-                    element: f.element,
-                    kind,
-                }
-            })
-            .collect();
+        let odd = is_odd(flip);
         HexMesh {
-            nodes,
-            elements,
-            boundary,
+            nodes: mirrored_nodes(&self.nodes, flip),
+            elements: permuted(&self.elements, REVERSE_HEX, odd),
+            boundary: self
+                .boundary
+                .iter()
+                .map(|f| BoundaryFace {
+                    nodes: if odd {
+                        REVERSE_QUAD.map(|i| f.nodes[i])
+                    } else {
+                        f.nodes
+                    },
+                    element: f.element,
+                    kind: mirrored_kind(f.kind, flip),
+                })
+                .collect(),
         }
     }
 
     /// The mesh shifted by `offset` \[mm\].
     pub fn translated(&self, offset: [f64; 3]) -> HexMesh {
-        let nodes = self
-            .nodes
-            .iter()
-            .map(|p| std::array::from_fn(|i| p[i] + offset[i]))
-            .collect();
         HexMesh {
-            nodes,
+            nodes: translated_nodes(&self.nodes, offset),
             elements: self.elements.clone(),
             boundary: self.boundary.clone(),
         }
@@ -91,20 +64,9 @@ impl TetMesh {
     /// reversed to keep its normal outward; `FaceKind::Plane::high` is toggled on
     /// flipped axes; node and element numbering are unchanged.
     pub fn mirrored(&self, flip: [bool; 3]) -> TetMesh {
-        let nodes = self
-            .nodes
-            .iter()
-            .map(|p| std::array::from_fn(|i| if flip[i] { 0.0 - p[i] } else { p[i] }))
-            .collect();
-        let odd = flip.iter().filter(|&&f| f).count() % 2 == 1;
-        let elements = if odd {
-            self.elements
-                .iter()
-                .map(|el| REVERSE_TET.map(|i| el[i]))
-                .collect()
-        } else {
-            self.elements.clone()
-        };
+        let odd = is_odd(flip);
+        let nodes = mirrored_nodes(&self.nodes, flip);
+        let elements = permuted(&self.elements, REVERSE_TET, odd);
         let boundary = self
             .boundary
             .iter()
@@ -128,11 +90,7 @@ impl TetMesh {
     /// The mesh shifted by `offset` \[mm\].
     pub fn translated(&self, offset: [f64; 3]) -> TetMesh {
         TetMesh {
-            nodes: self
-                .nodes
-                .iter()
-                .map(|p| std::array::from_fn(|i| p[i] + offset[i]))
-                .collect(),
+            nodes: translated_nodes(&self.nodes, offset),
             elements: self.elements.clone(),
             boundary: self.boundary.clone(),
         }
@@ -147,5 +105,40 @@ fn mirrored_kind(kind: FaceKind, flip: [bool; 3]) -> FaceKind {
             high: high ^ flip[axis],
         },
         FaceKind::Curved => FaceKind::Curved,
+    }
+}
+
+/// Whether mirroring the axes with `flip` reverses handedness.
+fn is_odd(flip: [bool; 3]) -> bool {
+    flip.iter().filter(|&&f| f).count() % 2 == 1
+}
+
+/// Node coordinates with `x_i -> -x_i` on the flipped axes; `0.0 - v` rather
+/// than `-v` keeps coordinate 0 as +0.0.
+fn mirrored_nodes(nodes: &[[f64; 3]], flip: [bool; 3]) -> Vec<[f64; 3]> {
+    nodes
+        .iter()
+        .map(|p| std::array::from_fn(|i| if flip[i] { 0.0 - p[i] } else { p[i] }))
+        .collect()
+}
+
+/// Node coordinates shifted by `offset` [mm].
+fn translated_nodes(nodes: &[[f64; 3]], offset: [f64; 3]) -> Vec<[f64; 3]> {
+    nodes
+        .iter()
+        .map(|p| std::array::from_fn(|i| p[i] + offset[i]))
+        .collect()
+}
+
+/// Element connectivity renumbered by `perm` when `odd`, else unchanged.
+fn permuted<const N: usize>(
+    elements: &[[usize; N]],
+    perm: [usize; N],
+    odd: bool,
+) -> Vec<[usize; N]> {
+    if odd {
+        elements.iter().map(|el| perm.map(|i| el[i])).collect()
+    } else {
+        elements.to_vec()
     }
 }

@@ -23,7 +23,7 @@ impl Value {
 }
 
 /// Number of entries of a curve point.
-const POINT_LEN: usize = 14;
+const POINT_LEN: usize = 15;
 
 /// The entries of a curve point, in one place for `advance()` and `curve()`.
 fn point_entries(p: &CurvePoint) -> [(&'static str, Value); POINT_LEN] {
@@ -42,6 +42,7 @@ fn point_entries(p: &CurvePoint) -> [(&'static str, Value); POINT_LEN] {
         ("particle_volume_mm3", Float(p.particle_volume)),
         ("time_error_s", Float(p.time_error)),
         ("contacts", Count(p.contacts)),
+        ("particle_contacts", Count(p.particle_contacts)),
         ("max_penetration_mm", Float(p.max_penetration)),
     ]
 }
@@ -177,6 +178,7 @@ mod tests {
             particle_volume: 1e-4,
             time_error: 0.0,
             contacts: 7,
+            particle_contacts: 0,
             max_penetration: 0.0,
         }
     }

@@ -281,7 +281,9 @@ impl PySimulation {
     /// The point is a dict: time_s, rel_density, piston_displacement_mm
     /// (negative in compression), applied_stress_mpa, cell_stress_mpa, step,
     /// newton_iterations, newton_total, dt_s, max_strain_increment,
-    /// particle_volume_mm3, time_error_s, contacts, max_penetration_mm.
+    /// particle_volume_mm3, time_error_s, contacts (plane dofs in contact),
+    /// particle_contacts (nodes pressed on another particle), max_penetration_mm
+    /// (into a plane or a particle).
     /// Once stopped, returns the last point again. Raises ConvergenceError if
     /// the step fails; the state stays at the last converged step.
     fn advance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {

@@ -52,8 +52,13 @@ pub struct Cell {
 pub const ASPECT_RANGE: (f64, f64) = (0.2, 5.0);
 /// Allowed range of the particle radius [mm].
 pub const RADIUS_RANGE: (f64, f64) = (1e-6, 1e3);
-/// Allowed range of the sc-2 radius ratio R_large / R_small.
-pub const SIZE_RATIO_RANGE: (f64, f64) = (1.0, 10.0);
+/// Relative slack allowed when an octant must fit its box or stay outside
+/// another particle (level function, about twice the relative distance), so
+/// cells written with 7 significant digits still fit.
+pub const FIT_TOLERANCE: f64 = 1e-6;
+/// Allowed range of the sc-2 radius ratio R_large / R_small: above 1 + sqrt 2
+/// the large particles would overlap across the face diagonals.
+pub const SIZE_RATIO_RANGE: (f64, f64) = (1.0, 1.0 + std::f64::consts::SQRT_2);
 /// The seed's sc-2 radius ratio.
 pub const DEFAULT_SIZE_RATIO: f64 = 1.566;
 
@@ -99,7 +104,7 @@ impl Cell {
             check("a", o.a, RADIUS_RANGE, "in [1e-6, 1e3] mm")?;
             check("c", o.c, RADIUS_RANGE, "in [1e-6, 1e3] mm")?;
             check("c/a", o.c / o.a, ASPECT_RANGE, "in [0.2, 5]")?;
-            let tol = 1e-9;
+            let tol = FIT_TOLERANCE;
             if o.a > lengths[0] * (1.0 + tol) || o.a > lengths[1] * (1.0 + tol) {
                 return Err(SolverError::parameter(
                     "a",
@@ -181,7 +186,7 @@ impl Cell {
             "size_ratio",
             size_ratio,
             SIZE_RATIO_RANGE,
-            "in [1, 10] (R_large / R_small)",
+            "in [1, 1 + sqrt 2 = 2.414] (R_large / R_small; beyond it the large particles overlap across the face diagonals)",
         )?;
         let small = radius / size_ratio;
         let s = radius + small;

@@ -2,7 +2,7 @@
 //! particles, with the curved surface of each), and the plain blocks of the
 //! verification ladder.
 
-use crate::cell::Cell;
+use crate::cell::{Cell, FIT_TOLERANCE};
 use crate::error::SolverError;
 use serde::{Deserialize, Serialize};
 use tidens_fem::ElementKind;
@@ -250,7 +250,8 @@ impl Scene {
 }
 
 /// Fails when a node of one particle lies inside another particle's
-/// spheroid (by more than a relative 1e-9 of its level function).
+/// spheroid (by more than a relative `FIT_TOLERANCE` of its level function,
+/// so cells written with rounded numbers still fit).
 fn check_no_overlap(
     cell: &Cell,
     mesh: &HexMesh,
@@ -265,7 +266,7 @@ fn check_no_overlap(
             let (first, count) = p.nodes;
             if let Some(node) = mesh.nodes[first..first + count]
                 .iter()
-                .find(|x| other.level(cell.lengths, **x) < 1.0 - 1e-9)
+                .find(|x| other.level(cell.lengths, **x) < 1.0 - FIT_TOLERANCE)
             {
                 return Err(SolverError::Unsupported(format!(
                     "cell '{}': octants {} and {} overlap (a node of {} at {node:?} is inside {})",
@@ -330,5 +331,36 @@ mod tests {
         .unwrap();
         let err = Scene::from_cell(&cell, &MeshOptions::default()).unwrap_err();
         assert!(err.to_string().contains("overlap"), "{err}");
+    }
+
+    #[test]
+    fn touching_cells_with_rounded_lengths_fit_and_the_sc2_limit_meshes() {
+        // bcc with the box edge 2R/sqrt3 rounded to 7 significant digits
+        // (0.05773503 is 5e-8 above and 0.05773502 1.2e-7 below the exact edge).
+        for s in [0.05773503, 0.05773502] {
+            let o = |corner| Octant {
+                corner,
+                a: 0.05,
+                c: 0.05,
+            };
+            let cell = Cell::new("bcc7", [s; 3], vec![o([false; 3]), o([true; 3])]);
+            let cell = cell.unwrap();
+            assert!(Scene::from_cell(&cell, &MeshOptions::default()).is_ok());
+        }
+        // sc-2 at r = 1 + sqrt 2: the large particles touch across the face
+        // diagonals without overlapping; just above it the ratio is refused.
+        let limit = crate::cell::SIZE_RATIO_RANGE.1;
+        let cell = Cell::sc2(0.05, limit, 1.0).unwrap();
+        assert!(Scene::from_cell(&cell, &MeshOptions::default()).is_ok());
+        assert!(Cell::sc2(0.05, limit * (1.0 + 1e-3), 1.0).is_err());
+        // a real overlap of 1e-4 is still caught
+        let o = |corner| Octant {
+            corner,
+            a: 0.05,
+            c: 0.05,
+        };
+        let s = 0.05 * 2.0 / 3f64.sqrt() * (1.0 - 1e-4);
+        let cell = Cell::new("bcc-", [s; 3], vec![o([false; 3]), o([true; 3])]).unwrap();
+        assert!(Scene::from_cell(&cell, &MeshOptions::default()).is_err());
     }
 }

@@ -41,7 +41,11 @@ pub struct CurvePoint {
     pub time_error: f64,
     /// Surface dofs in contact with a rigid plane.
     pub contacts: usize,
-    /// Largest penetration of a free surface node into a rigid plane [mm].
+    /// Surface nodes pressed against another particle (each contact pass
+    /// counts its slave nodes that carry pressure; tied: nodes tied).
+    pub particle_contacts: usize,
+    /// Largest penetration of a surface node into a rigid plane or into
+    /// another particle [mm].
     pub max_penetration: f64,
 }
 
@@ -430,6 +434,12 @@ impl Simulation {
             particle_volume: volume,
             time_error: self.time_error,
             contacts: self.constraints.contact_counts().iter().sum(),
+            particle_contacts: self
+                .contact_eval
+                .terms
+                .iter()
+                .filter(|t| t.pressure > 0.0)
+                .count(),
             max_penetration: self
                 .constraints
                 .max_penetration(&self.u, self.piston)
