@@ -33,7 +33,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--cell-file", type=Path, metavar="PATH", help="a cell described in a JSON or TOML file, instead of --cell (schema: python -c 'import tidens_rs.cells as c; help(c)')")
     g.add_argument("--aspect-ratio", type=float, help="spheroid c/a, c along the load (default 1)")
     g.add_argument("--radius", type=float, help="particle radius a [mm], the large one for sc2 (default 0.05; the curve does not depend on it)")
-    g.add_argument("--size-ratio", type=float, help=f"sc2 only: radius of the large particles over the small ones, in [1, 10] (default {cells.DEFAULT_SIZE_RATIO:g})")
+    g.add_argument("--size-ratio", type=float, help=f"sc2 only: radius of the large particles over the small ones, in [1, 1 + sqrt 2 = 2.414] (default {cells.DEFAULT_SIZE_RATIO:g})")
     g = p.add_argument_group("contact")
     g.add_argument("--contact", choices=CONTACT_MODES, default=CONTACT_MODES[0], help="between particles: frictionless sliding (default) or tied once closed (no sliding)")
     g.add_argument("--tied-planes", action="store_true", help="sensitivity option, not the default: tie particle surface nodes to the rigid die planes they touch (rough walls); by default the planes are frictionless mirror planes, as the symmetry of the packing requires")

@@ -106,7 +106,7 @@ impl PyCell {
 
     /// Two-size simple cubic cell in rock-salt order: large particles of
     /// radius R = radius_mm [mm] and small ones of R/r, r = size_ratio in
-    /// [1, 10], alternating over the eight corners of a box of edge R + R/r
+    /// [1, 1 + sqrt 2] (beyond it the large particles overlap), alternating over the eight corners of a box of edge R + R/r
     /// (z scaled by aspect_ratio); rho0 = (2 pi/3)(1 + r^3)/(1 + r)^3
     /// (0.60002 at the seed's r = 1.566).
     #[staticmethod]
