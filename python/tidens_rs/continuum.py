@@ -21,6 +21,7 @@ at rho0), mapped back from ``t_eff`` to ``t``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
@@ -30,6 +31,14 @@ B_FINAL = 1.8
 STAGE_SWITCH = 0.9
 
 FloatArray = npt.NDArray[np.float64]
+
+
+@lru_cache(maxsize=4)
+def _gauss_legendre(points: int) -> tuple[FloatArray, FloatArray]:
+    """Gauss-Legendre nodes and weights on [0, 1] (computed once: numpy
+    finds them from an eigenvalue problem)."""
+    u, w = np.polynomial.legendre.leggauss(points)
+    return 0.5 * (u + 1.0), 0.5 * w
 
 
 @dataclass(frozen=True)
@@ -92,9 +101,7 @@ class ContinuumModel:
         targets = np.atleast_1d(np.asarray(rho, dtype=float))
         if np.any(targets < self.rho0) or np.any(targets >= 1.0):
             raise ValueError(f"rho must be in [rho0 = {self.rho0:.5f}, 1)")
-        u, w = np.polynomial.legendre.leggauss(points)
-        u = 0.5 * (u + 1.0)
-        w = 0.5 * w
+        u, w = _gauss_legendre(points)
         out = np.empty_like(targets)
         for k, target in enumerate(targets):
             first = min(target, STAGE_SWITCH)

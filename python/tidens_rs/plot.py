@@ -15,13 +15,13 @@ if TYPE_CHECKING:
 def plot_density(result: Result) -> Figure:
     """Relative density versus time, FE beside the continuum model, on a
     linear and a logarithmic time axis."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot as plt
+    # A bare Figure renders with Agg and needs neither pyplot nor a GUI
+    # backend (whose import and set-up cost more than the plot).
+    from matplotlib.figure import Figure
 
     c = result.case
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+    fig = Figure(figsize=(10, 4), layout="constrained")
+    axes = fig.subplots(1, 2)
     t, rho = result.time_s, result.rel_density
     rho_end = float(max(rho[-1], c.cell.rho0 + 1e-3))
     tc, rc = result.continuum().curve(min(rho_end, 0.999))
@@ -34,7 +34,7 @@ def plot_density(result: Result) -> Figure:
         keep = t > 0 if log else np.ones_like(t, dtype=bool)
         ax.plot(t[keep], rho[keep], "-", color="C0", label=label)
         keep_c = tc > 0 if log else np.ones_like(tc, dtype=bool)
-        ax.plot(tc[keep_c], rc[keep_c], "--", color="C3", label="continuum model (seed Eqs. 2, 3)")
+        ax.plot(tc[keep_c], rc[keep_c], "--", color="C3", label="continuum model (Eqs. 2, 3 of the paper)")
         ax.set_xlabel("time [s]")
         ax.set_ylabel("relative density")
         ax.grid(True, alpha=0.3)

@@ -197,5 +197,5 @@ class Result:
 
         fig = plot_density(self)
         if path is not None:
-            fig.savefig(Path(path), dpi=150, bbox_inches="tight")
+            fig.savefig(Path(path), dpi=150)
         return fig

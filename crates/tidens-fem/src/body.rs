@@ -3,7 +3,7 @@
 
 use crate::error::FemError;
 use crate::mean_dilatation::{
-    self, Hex8Geometry, MeanDilatationGeometry, MeanDilatationOutput, Tet10Geometry,
+    self, ElementSummary, Hex8Geometry, MeanDilatationGeometry, Tet10Geometry,
 };
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -74,48 +74,23 @@ pub struct Body {
     states: Vec<PointState>,
 }
 
-/// What one element evaluation gives, whatever the element.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ElementResult {
-    /// Internal force, `residual[3 a + i]` \[N\].
-    pub residual: Vec<f64>,
-    /// Consistent tangent, row-major, entry `(3a+i, 3b+k)` \[N/mm\]; empty when
-    /// not requested.
-    pub tangent: Vec<f64>,
-    /// Material states at the end of the step.
-    pub states: Vec<PointState>,
-    /// Current volume [mm^3].
-    pub volume: f64,
-    /// Largest equivalent plastic strain increment over the material points.
-    pub max_dp: f64,
-    /// Volume-weighted mean von Mises Cauchy stress \[MPa\].
-    pub von_mises: f64,
-    /// Mean (Cauchy) stress, tension positive \[MPa\].
-    pub mean_stress: f64,
-    /// Volume-weighted mean equivalent plastic strain.
-    pub eqps: f64,
-}
-
-impl<const NDOF: usize, const NGP: usize> From<MeanDilatationOutput<NDOF, NGP>> for ElementResult {
-    fn from(o: MeanDilatationOutput<NDOF, NGP>) -> Self {
-        Self {
-            residual: o.residual.to_vec(),
-            tangent: o.tangent,
-            states: o.states.to_vec(),
-            volume: o.volume,
-            max_dp: o.max_dp,
-            von_mises: o.von_mises,
-            mean_stress: o.mean_stress,
-            eqps: o.eqps,
-        }
-    }
-}
-
-/// Element results of one evaluation of the whole body.
+/// Element results of one evaluation of the whole body, in flat arrays in
+/// element order (no allocation per element).
 #[derive(Clone, Debug)]
 pub struct BodyEvaluation {
-    /// One result per element, in element order.
-    pub elements: Vec<ElementResult>,
+    /// Dofs per element (`3 * nodes`).
+    ndof: usize,
+    /// Material points per element.
+    npoints: usize,
+    /// Element internal forces, `ndof` per element \[N\].
+    residuals: Vec<f64>,
+    /// Element tangents, row-major `ndof x ndof` per element \[N/mm\]; empty
+    /// when not requested.
+    tangents: Vec<f64>,
+    /// Material states at the end of the step, `npoints` per element.
+    states: Vec<PointState>,
+    /// Scalar results per element.
+    summaries: Vec<ElementSummary>,
 }
 
 /// Element-wise fields for output.
@@ -274,7 +249,8 @@ impl Body {
 
     /// Evaluates every element (in parallel) at displacement `u` (length
     /// `dof_count`) \[mm\] after a step of `dt` \[s\] from the committed state.
-    /// Deterministic: each element is computed independently.
+    /// Deterministic: each element is computed independently into its own
+    /// slots of the result; an error names the lowest failing element.
     pub fn evaluate(
         &self,
         u: &[f64],
@@ -288,12 +264,11 @@ impl Body {
                 self.dof_count()
             )));
         }
-        let elements = match &self.geometry {
+        match &self.geometry {
             Geometry::None => Err(FemError::Mesh("element geometry not built".into())),
             Geometry::Hex8(g) => self.evaluate_all::<8, 8, 0, 24>(g, u, dt, with_tangent),
             Geometry::Tet10(g) => self.evaluate_all::<10, 4, 6, 30>(g, u, dt, with_tangent),
-        }?;
-        Ok(BodyEvaluation { elements })
+        }
     }
 
     fn evaluate_all<const NEN: usize, const NGP: usize, const NXP: usize, const NDOF: usize>(
@@ -302,37 +277,69 @@ impl Body {
         u: &[f64],
         dt: f64,
         with_tangent: bool,
-    ) -> Result<Vec<ElementResult>, FemError> {
-        geometry
+    ) -> Result<BodyEvaluation, FemError> {
+        let count = geometry.len();
+        let mut residuals = vec![0.0; count * NDOF];
+        let mut tangents = if with_tangent {
+            vec![0.0; count * NDOF * NDOF]
+        } else {
+            Vec::new()
+        };
+        let mut states = vec![PointState::default(); count * NGP];
+        // With no tangent, each element gets an empty tangent slice.
+        let tangent_len = if with_tangent { NDOF * NDOF } else { 0 };
+        let tangent_chunks: Vec<&mut [f64]> = if with_tangent {
+            tangents.chunks_mut(tangent_len).collect()
+        } else {
+            (0..count).map(|_| <&mut [f64]>::default()).collect()
+        };
+        let results: Vec<Result<ElementSummary, FemError>> = geometry
             .par_iter()
+            .zip(residuals.par_chunks_mut(NDOF))
+            .zip(states.par_chunks_mut(NGP))
+            .zip(tangent_chunks.into_par_iter())
             .enumerate()
-            .map(|(e, geom)| {
+            .map(|(e, (((geom, residual), states), tangent))| {
                 let el = self.element_nodes(e);
                 let x: [[f64; 3]; NEN] = std::array::from_fn(|a| {
                     let (n, p) = (el[a], self.nodes[el[a]]);
                     [p[0] + u[3 * n], p[1] + u[3 * n + 1], p[2] + u[3 * n + 2]]
                 });
-                let states: [PointState; NGP] = std::array::from_fn(|k| self.states[NGP * e + k]);
-                let out: MeanDilatationOutput<NDOF, NGP> = mean_dilatation::evaluate(
+                let states_n: [PointState; NGP] =
+                    std::array::from_fn(|k| self.states[NGP * e + k]);
+                let residual: &mut [f64; NDOF] = residual
+                    .try_into()
+                    .map_err(|_| FemError::Mesh("element force buffer size".into()))?;
+                let states: &mut [PointState; NGP] = states
+                    .try_into()
+                    .map_err(|_| FemError::Mesh("element state buffer size".into()))?;
+                mean_dilatation::evaluate_into(
                     e,
                     geom,
                     &x,
-                    &states,
+                    &states_n,
                     &self.material,
                     dt,
-                    with_tangent,
-                )?;
-                Ok(ElementResult::from(out))
+                    residual,
+                    with_tangent.then_some(tangent),
+                    states,
+                )
             })
-            .collect()
+            .collect();
+        let summaries = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+        Ok(BodyEvaluation {
+            ndof: NDOF,
+            npoints: NGP,
+            residuals,
+            tangents,
+            states,
+            summaries,
+        })
     }
 
     /// Makes the states of `eval` the converged state.
     pub fn commit(&mut self, eval: &BodyEvaluation) {
-        let k = self.kind.points();
-        for (e, out) in eval.elements.iter().enumerate() {
-            self.states[k * e..k * (e + 1)].copy_from_slice(&out.states);
-        }
+        self.states.copy_from_slice(&eval.states);
     }
 
     /// Replaces the material (e.g. to continue a run with other constants).
@@ -342,14 +349,59 @@ impl Body {
 }
 
 impl BodyEvaluation {
+    /// Number of elements.
+    pub fn element_count(&self) -> usize {
+        self.summaries.len()
+    }
+
+    /// Internal force of element `e`, `residual[3 a + i]` \[N\].
+    pub fn element_residual(&self, e: usize) -> &[f64] {
+        &self.residuals[self.ndof * e..self.ndof * (e + 1)]
+    }
+
+    /// Consistent tangent of element `e`, row-major, entry `(3a+i, 3b+k)`
+    /// \[N/mm\]; empty when the evaluation was made without tangents.
+    pub fn element_tangent(&self, e: usize) -> &[f64] {
+        let m = self.ndof * self.ndof;
+        self.tangents.get(m * e..m * (e + 1)).unwrap_or(&[])
+    }
+
+    /// All element tangents, `ndof x ndof` each, in element order (empty
+    /// without tangents).
+    pub fn tangents(&self) -> &[f64] {
+        &self.tangents
+    }
+
+    /// All element internal forces, `ndof` each, in element order.
+    pub fn residuals(&self) -> &[f64] {
+        &self.residuals
+    }
+
+    /// True when the evaluation carries element tangents.
+    pub fn has_tangent(&self) -> bool {
+        !self.tangents.is_empty()
+    }
+
+    /// Material states of element `e` at the end of the step.
+    pub fn element_states(&self, e: usize) -> &[PointState] {
+        &self.states[self.npoints * e..self.npoints * (e + 1)]
+    }
+
+    /// Scalar results of element `e` (volume, largest plastic strain
+    /// increment, mean stresses).
+    pub fn element_summary(&self, e: usize) -> &ElementSummary {
+        &self.summaries[e]
+    }
+
     /// Internal force vector of the body (length `3 * nodes`) \[N\], summed in
     /// element order (deterministic).
     pub fn internal_force(&self, body: &Body) -> Vec<f64> {
         let mut f = vec![0.0; body.dof_count()];
-        for (e, out) in self.elements.iter().enumerate() {
+        for e in 0..self.element_count() {
+            let r = self.element_residual(e);
             for (a, &node) in body.element_nodes(e).iter().enumerate() {
                 for i in 0..3 {
-                    f[3 * node + i] += out.residual[3 * a + i];
+                    f[3 * node + i] += r[3 * a + i];
                 }
             }
         }
@@ -358,20 +410,20 @@ impl BodyEvaluation {
 
     /// Current volume of the body [mm^3].
     pub fn volume(&self) -> f64 {
-        self.elements.iter().map(|o| o.volume).sum()
+        self.summaries.iter().map(|o| o.volume).sum()
     }
 
     /// Largest equivalent plastic strain increment at any material point.
     pub fn max_dp(&self) -> f64 {
-        self.elements.iter().map(|o| o.max_dp).fold(0.0, f64::max)
+        self.summaries.iter().map(|o| o.max_dp).fold(0.0, f64::max)
     }
 
     /// Element-wise output fields.
     pub fn fields(&self) -> ElementFields {
         ElementFields {
-            von_mises: self.elements.iter().map(|o| o.von_mises).collect(),
-            mean_stress: self.elements.iter().map(|o| o.mean_stress).collect(),
-            eqps: self.elements.iter().map(|o| o.eqps).collect(),
+            von_mises: self.summaries.iter().map(|o| o.von_mises).collect(),
+            mean_stress: self.summaries.iter().map(|o| o.mean_stress).collect(),
+            eqps: self.summaries.iter().map(|o| o.eqps).collect(),
         }
     }
 }

@@ -16,16 +16,18 @@
 //!
 //! [`Material`]: tidens_material::Material
 
+mod assembly;
 mod body;
 mod error;
 pub mod mean_dilatation;
 mod reference;
 mod sparse;
 
-pub use body::{Body, BodyEvaluation, ElementFields, ElementKind, ElementResult};
+pub use assembly::ElementAssembler;
+pub use body::{Body, BodyEvaluation, ElementFields, ElementKind};
 pub use error::FemError;
 pub use mean_dilatation::{
-    ElementGeometry, ElementOutput, Hex8Geometry, Hex8Output, MeanDilatationGeometry,
+    ElementGeometry, ElementOutput, ElementSummary, Hex8Geometry, Hex8Output, MeanDilatationGeometry,
     MeanDilatationOutput, Tet10Degree3Geometry, Tet10Degree3Output, Tet10Geometry, Tet10Output,
 };
 pub use reference::{Hex8, ReferenceElement, Tet10, Tet10Degree3};

@@ -264,6 +264,22 @@ fn add_volume_curvature<const NEN: usize, const NDOF: usize>(
     }
 }
 
+/// Scalar results of one element evaluation (the force, tangent and states
+/// go to the caller's buffers, see [`evaluate_into`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ElementSummary {
+    /// Current volume [mm^3].
+    pub volume: f64,
+    /// Largest equivalent plastic strain increment over the material points.
+    pub max_dp: f64,
+    /// Volume-weighted mean von Mises Cauchy stress \[MPa\].
+    pub von_mises: f64,
+    /// Mean (Cauchy) stress, tension positive \[MPa\].
+    pub mean_stress: f64,
+    /// Volume-weighted mean equivalent plastic strain.
+    pub eqps: f64,
+}
+
 /// Evaluates one element at current node coordinates `x` \[mm\] after a time
 /// step `dt` \[s\] from the states `states_n` at its material points: the
 /// internal force, and the consistent tangent when `with_tangent`.
@@ -281,7 +297,6 @@ pub fn evaluate<const NEN: usize, const NGP: usize, const NXP: usize, const NDOF
     dt: f64,
     with_tangent: bool,
 ) -> Result<MeanDilatationOutput<NDOF, NGP>, FemError> {
-    const { assert!(NDOF == 3 * NEN, "NDOF must be 3 NEN") };
     let mut residual = [0.0; NDOF];
     let mut tangent = if with_tangent {
         vec![0.0; NDOF * NDOF]
@@ -289,6 +304,52 @@ pub fn evaluate<const NEN: usize, const NGP: usize, const NXP: usize, const NDOF
         Vec::new()
     };
     let mut states = [PointState::default(); NGP];
+    let s = evaluate_into(
+        element,
+        geom,
+        x,
+        states_n,
+        material,
+        dt,
+        &mut residual,
+        with_tangent.then_some(tangent.as_mut_slice()),
+        &mut states,
+    )?;
+    Ok(MeanDilatationOutput {
+        residual,
+        tangent,
+        states,
+        volume: s.volume,
+        max_dp: s.max_dp,
+        von_mises: s.von_mises,
+        mean_stress: s.mean_stress,
+        eqps: s.eqps,
+    })
+}
+
+/// [`evaluate`] into the caller's buffers: the internal force into
+/// `residual` \[N\], the consistent tangent (row-major `NDOF x NDOF`,
+/// \[N/mm\]) into `tangent` when given (overwritten), the material states at
+/// the end of the step into `states`. No heap allocation.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate_into<const NEN: usize, const NGP: usize, const NXP: usize, const NDOF: usize>(
+    element: usize,
+    geom: &MeanDilatationGeometry<NEN, NGP, NXP>,
+    x: &[[f64; 3]; NEN],
+    states_n: &[PointState; NGP],
+    material: &Material,
+    dt: f64,
+    residual: &mut [f64; NDOF],
+    mut tangent: Option<&mut [f64]>,
+    states: &mut [PointState; NGP],
+) -> Result<ElementSummary, FemError> {
+    const { assert!(NDOF == 3 * NEN, "NDOF must be 3 NEN") };
+    let with_tangent = tangent.is_some();
+    residual.fill(0.0);
+    if let Some(t) = tangent.as_deref_mut() {
+        debug_assert_eq!(t.len(), NDOF * NDOF);
+        t.fill(0.0);
+    }
     let mut dv = [0.0; NDOF];
     let mut gx = [[[0.0; 3]; NEN]; NGP];
     let mut jdet = [0.0; NGP];
@@ -322,7 +383,7 @@ pub fn evaluate<const NEN: usize, const NGP: usize, const NXP: usize, const NDOF
                     w * (0..3).map(|j| resp.tau_dev[(i, j)] * g[a][j]).sum::<f64>();
             }
         }
-        if let Some(at) = &resp.tangent {
+        if let (Some(at), Some(tangent)) = (&resp.tangent, tangent.as_deref_mut()) {
             // t[(ij), (b k)] = sum_l a[(ij),(kl)] g_b,l
             let mut t = [[0.0; NDOF]; 9];
             for (ij, row) in t.iter_mut().enumerate() {
@@ -367,14 +428,14 @@ pub fn evaluate<const NEN: usize, const NGP: usize, const NXP: usize, const NDOF
     for (r, d) in residual.iter_mut().zip(dv.iter()) {
         *r += u1 * d;
     }
-    if with_tangent {
+    if let Some(tangent) = tangent.as_deref_mut() {
         for gp in 0..NGP {
             let c = u1 * geom.volume_weight[gp] * jdet[gp];
-            add_volume_curvature::<NEN, NDOF>(&mut tangent, c, &gx[gp]);
+            add_volume_curvature::<NEN, NDOF>(tangent, c, &gx[gp]);
         }
         for xp in 0..NXP {
             let c = u1 * geom.extra_weight[xp] * jdet_extra[xp];
-            add_volume_curvature::<NEN, NDOF>(&mut tangent, c, &gx_extra[xp]);
+            add_volume_curvature::<NEN, NDOF>(tangent, c, &gx_extra[xp]);
         }
         let c = u2 / v0;
         for p in 0..NDOF {
@@ -386,10 +447,7 @@ pub fn evaluate<const NEN: usize, const NGP: usize, const NXP: usize, const NDOF
     // Means over the material points (the deviatoric rule's own volume, which
     // is the reference volume for the hexahedron).
     let w_sum: f64 = geom.weight.iter().sum();
-    Ok(MeanDilatationOutput {
-        residual,
-        tangent,
-        states,
+    Ok(ElementSummary {
         volume,
         max_dp,
         von_mises: q_sum / w_sum / theta,

@@ -106,6 +106,12 @@ impl SparseSystem {
         missed
     }
 
+    /// Adds `value` to the stored entry at `slot` (an index into
+    /// [`SparseSystem::values`], e.g. from [`SparseSystem::position`]).
+    pub fn add_at(&mut self, slot: usize, value: f64) {
+        self.values[slot] += value;
+    }
+
     /// Adds `value` to entry (`row`, `col`); false if it is not in the pattern.
     pub fn add(&mut self, row: usize, col: usize, value: f64) -> bool {
         match self.position(row, col) {

@@ -71,7 +71,7 @@ fn element_tangent_equals_finite_differences() {
                 *v += 0.02 * ((k * 5) as f64).cos();
             }
             let ev = body.evaluate(&u, dt, true).unwrap();
-            let k_an = &ev.elements[0].tangent;
+            let k_an = ev.element_tangent(0);
             let scale = k_an.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
             let h = 1e-7;
             for q in 0..24 {
@@ -79,12 +79,16 @@ fn element_tangent_equals_finite_differences() {
                 up[q] += h;
                 let mut um = u.clone();
                 um[q] -= h;
-                let rp = body.evaluate(&up, dt, false).unwrap().elements[0]
-                    .residual
-                    .clone();
-                let rm = body.evaluate(&um, dt, false).unwrap().elements[0]
-                    .residual
-                    .clone();
+                let rp = body
+                    .evaluate(&up, dt, false)
+                    .unwrap()
+                    .element_residual(0)
+                    .to_vec();
+                let rm = body
+                    .evaluate(&um, dt, false)
+                    .unwrap()
+                    .element_residual(0)
+                    .to_vec();
                 for p in 0..24 {
                     let fd = (rp[p] - rm[p]) / (2.0 * h);
                     let an = k_an[p * 24 + q];
@@ -159,7 +163,7 @@ fn patch_test_homogeneous_finite_deformation_is_exact() {
             }
             sys.clear();
             for e in 0..elements.len() {
-                sys.add_block(&body.element_dofs(e), &ev.elements[e].tangent, &map);
+                sys.add_block(&body.element_dofs(e), ev.element_tangent(e), &map);
             }
             let mut k = DMatrix::zeros(neq, neq);
             for c in 0..neq {

@@ -154,6 +154,9 @@ pub(crate) fn stats_dict<'py>(py: Python<'py>, s: &RunStats) -> PyResult<Bound<'
     dict.set_item("llt_factorizations", s.factorizations.llt)?;
     dict.set_item("lblt_factorizations", s.factorizations.lblt)?;
     dict.set_item("evaluation_seconds", s.evaluation_seconds)?;
+    dict.set_item("contact_seconds", s.contact_seconds)?;
+    dict.set_item("evaluations", s.evaluations)?;
+    dict.set_item("tangent_evaluations", s.tangent_evaluations)?;
     dict.set_item("assembly_seconds", s.assembly_seconds)?;
     dict.set_item("linear_seconds", s.linear_seconds)?;
     Ok(dict)

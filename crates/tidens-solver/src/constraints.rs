@@ -47,6 +47,15 @@ pub struct Constraints {
     unilateral: Vec<usize>,
 }
 
+/// The contact state of the rigid planes, saved to redo a step from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlaneContactState {
+    /// For each dof: `Some(high)` while in contact with that plane.
+    contact: Vec<Option<bool>>,
+    /// For each dof: the value it is tied at (tied planes only).
+    ties: Vec<Option<f64>>,
+}
+
 /// After this many active-set changes in one step a dof may still come into
 /// contact but is no longer released in that step: this ends chattering
 /// between contact and release on the safe side (a small tensile contact
@@ -322,13 +331,17 @@ impl Constraints {
 
     /// Contact state of the unilateral dofs (and ties), to save and restore
     /// around a step.
-    pub fn contact_state(&self) -> (Vec<Option<bool>>, Vec<Option<f64>>) {
-        (self.contact.clone(), self.ties.clone())
+    pub fn contact_state(&self) -> PlaneContactState {
+        PlaneContactState {
+            contact: self.contact.clone(),
+            ties: self.ties.clone(),
+        }
     }
 
-    pub fn set_contact_state(&mut self, (contact, ties): (Vec<Option<bool>>, Vec<Option<f64>>)) {
-        self.contact = contact;
-        self.ties = ties;
+    /// Restores a state saved by [`Constraints::contact_state`].
+    pub fn set_contact_state(&mut self, state: PlaneContactState) {
+        self.contact = state.contact;
+        self.ties = state.ties;
     }
 
     /// Number of surface dofs in contact with each plane, indexed `2 axis + high`.

@@ -4,25 +4,35 @@
 //! verification block) in a rigid die: frictionless rigid planes handled
 //! analytically ([`constraints`]), the piston displacement as one extra
 //! unknown loaded by `f sigma(t) Lx Ly` ([`LoadHistory`]), implicit
-//! backward-Euler steps solved by Newton with line search and faer sparse
-//! Cholesky ([`linear`]), and an adaptive step size with a per-step estimate
-//! of the time-discretisation error ([`Settings::tolerance`]).
+//! backward-Euler steps solved by Newton with line search (`newton`,
+//! `line_search`) on a system gathered in parallel (`assembler`) and
+//! factorised by faer's sparse Cholesky ([`linear`]), and an adaptive step
+//! size with a per-step estimate of the time-discretisation error
+//! (`step_control`, [`Settings::tolerance`]). The curve, fields and totals
+//! a run reports are in `output`.
 
+mod assembler;
 mod cell;
 pub mod constraints;
 mod error;
+mod evaluation;
 pub mod linear;
+mod line_search;
 mod load;
+mod newton;
+mod output;
 mod scene;
 mod settings;
 mod simulation;
+mod step_control;
 
 pub use cell::{ASPECT_RANGE, Cell, DEFAULT_SIZE_RATIO, Octant, RADIUS_RANGE, SIZE_RATIO_RANGE};
 pub use error::SolverError;
 pub use load::LoadHistory;
 pub use scene::{MAX_MESH_LEVEL, MeshOptions, Particle, Scene};
 pub use settings::{ContactOptions, NewtonSettings, Settings};
-pub use simulation::{CurvePoint, Fields, RunStats, Simulation, Status};
+pub use output::{CurvePoint, Fields, RunStats, Status};
+pub use simulation::Simulation;
 pub use tidens_contact::ContactMode;
 pub use tidens_fem::ElementKind;
 pub use tidens_material::{Material, Preset};

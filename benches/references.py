@@ -1,0 +1,186 @@
+"""Converged reference times to density for the speed benchmark.
+
+    python benches/references.py [--cases sc10 sc bcc fcc sc2]
+                                 [--levels 1 2 3] [--level-tolerance 0.005]
+                                 [--time-level 2] [--tolerances 0.04 0.02 0.01 0.005]
+                                 [--out benches/references.json]
+
+For each case (the sc Ti-6Al-4V cell at 10 MPa to rho = 0.9, and sc, bcc,
+fcc and sc2 at 15 MPa to rho = 0.95) it estimates the converged t(0.8),
+t(0.9) and t(0.95) from two ladders, by Richardson extrapolation:
+
+- a mesh ladder (three or more mesh levels at one tight tolerance): with
+  element sizes h_i ~ 1/divisions_i, t(h) = t_h + a h^p; the observed order
+  p comes from the last three levels (the ratios of the levels differ, so p
+  is the root of (t1 - t2)/(t2 - t3) = (h1^p - h2^p)/(h2^p - h3^p)) and the
+  extrapolation from the last two;
+- a tolerance ladder (three or more tolerances at one level): t(tau) =
+  t_0 + b tau^q the same way, giving the time-discretisation error of the
+  mesh ladder's tolerance, which is added as a correction.
+
+The reference is the mesh-extrapolated value plus that time correction. Its
+uncertainty is reported as the size of the last mesh and time corrections
+(the extrapolation is only as good as the asymptotic range of the ladder,
+which the observed order tells). Every run is stored in the output file as
+it finishes, and runs already there are not repeated, so the command can
+be stopped and resumed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import tidens_rs as td
+
+HERE = Path(__file__).resolve().parent
+MARKS = (0.8, 0.9, 0.95)
+# name: (cell, stress [MPa], target density)
+CASES: dict[str, tuple[str, float, float]] = {
+    "sc10": ("sc", 10.0, 0.9),
+    "sc": ("sc", 15.0, 0.95),
+    "bcc": ("bcc", 15.0, 0.95),
+    "fcc": ("fcc", 15.0, 0.95),
+    "sc2": ("sc2", 15.0, 0.95),
+}
+# Inner-cube divisions of the mesh levels (element size ~ 1 / divisions).
+DIVISIONS = {1: 4, 2: 6, 3: 8, 4: 11, 5: 16, 6: 23}
+
+
+def run(case: str, level: int, tolerance: float) -> dict[str, Any]:
+    cell, stress, until = CASES[case]
+    c = td.Case(
+        cell=td.cells.by_name(cell),
+        material=td.materials.TI64_CREEP_1293K,
+        stress_mpa=stress,
+        solver=td.SolverSettings(mesh_level=level, tolerance=tolerance),
+    )
+    t0 = time.perf_counter()
+    r = c.run(until_density=until)
+    wall = time.perf_counter() - t0
+    s = r.summary()
+    return {
+        "level": level,
+        "tolerance": tolerance,
+        "dofs": r.degrees_of_freedom,
+        "rho0": r.rho0,
+        "wall_s": wall,
+        "steps": s["steps"],
+        "times_s": {f"{x:g}": r.time_to_density(x) for x in MARKS if x <= until},
+    }
+
+
+def observed_order(h: list[float], t: list[float]) -> float | None:
+    """Order p with (t1 - t2)/(t2 - t3) = (h1^p - h2^p)/(h2^p - h3^p), by
+    bisection on p in (0.2, 8); None when the differences change sign (no
+    monotone convergence) or no root lies there."""
+    d1, d2 = t[0] - t[1], t[1] - t[2]
+    if d1 == 0.0 or d2 == 0.0 or (d1 > 0) != (d2 > 0):
+        return None
+    ratio = d1 / d2
+
+    def f(p: float) -> float:
+        return (h[0] ** p - h[1] ** p) / (h[1] ** p - h[2] ** p) - ratio
+
+    lo, hi = 0.2, 8.0
+    if f(lo) * f(hi) > 0:
+        return None
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        if f(lo) * f(mid) <= 0:
+            hi = mid
+        else:
+            lo = mid
+    return 0.5 * (lo + hi)
+
+
+def extrapolate(h: list[float], t: list[float], p: float) -> float:
+    """Richardson from the last two points with order p."""
+    (h1, h2), (t1, t2) = h[-2:], t[-2:]
+    return t2 + (t2 - t1) * h2**p / (h1**p - h2**p)
+
+
+def ladder(xs: list[float], ts: list[float], default_order: float) -> dict[str, Any]:
+    """Observed order from the last three points (the default order when the
+    convergence is not monotone), and the extrapolated limit."""
+    p = observed_order(xs[-3:], ts[-3:]) if len(xs) >= 3 else None
+    used = p if p is not None else default_order
+    limit = extrapolate(xs, ts, used)
+    return {"order": p, "order_used": used, "limit": limit, "correction": limit - ts[-1]}
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cases", nargs="+", choices=list(CASES), default=list(CASES))
+    ap.add_argument("--levels", type=int, nargs="+", default=[1, 2, 3])
+    ap.add_argument("--level-tolerance", type=float, default=0.005, help="tolerance of the mesh ladder")
+    ap.add_argument("--time-level", type=int, default=2, help="mesh level of the tolerance ladder")
+    ap.add_argument("--tolerances", type=float, nargs="+", default=[0.04, 0.02, 0.01, 0.005])
+    ap.add_argument("--out", type=Path, default=HERE / "references.json")
+    args = ap.parse_args(argv)
+    data: dict[str, Any] = json.loads(args.out.read_text()) if args.out.exists() else {}
+    data.setdefault("runs", {})
+    data["command"] = "python benches/references.py " + " ".join(sys.argv[1:] if argv is None else argv)
+    data.setdefault("cases", {})
+
+    def get(case: str, level: int, tol: float) -> dict[str, Any]:
+        key = f"{case}/level{level}/tol{tol:g}"
+        if key not in data["runs"]:
+            print(f"# run {key}", file=sys.stderr, flush=True)
+            data["runs"][key] = run(case, level, tol)
+            args.out.write_text(json.dumps(data, indent=1) + "\n")
+        return data["runs"][key]
+
+    for case in args.cases:
+        _, _, until = CASES[case]
+        marks = [x for x in MARKS if x <= until]
+        levels = sorted(args.levels)
+        tols = sorted(args.tolerances, reverse=True)
+        mesh_runs = [get(case, lv, args.level_tolerance) for lv in levels]
+        time_runs = [get(case, args.time_level, tol) for tol in tols]
+        if args.level_tolerance not in tols:
+            time_runs.append(get(case, args.time_level, args.level_tolerance))
+            tols.append(args.level_tolerance)
+        h = [1.0 / DIVISIONS[lv] for lv in levels]
+        out: dict[str, Any] = {"times_s": {}, "uncertainty_s": {}, "mesh": {}, "time": {}}
+        for x in marks:
+            k = f"{x:g}"
+            tm = [r["times_s"][k] for r in mesh_runs]
+            mesh = ladder(h, tm, 2.0)
+            tt = [r["times_s"][k] for r in time_runs]
+            # The tolerance ladder sorted by tolerance, the mesh ladder's last.
+            order = sorted(range(len(tols)), key=lambda i: -tols[i])
+            xs = [tols[i] for i in order]
+            ys = [tt[i] for i in order]
+            tl = ladder(xs, ys, 1.0)
+            # Time correction of the mesh ladder's tolerance at the time level.
+            at_tol = ys[xs.index(args.level_tolerance)]
+            time_corr = tl["limit"] - at_tol
+            ref = mesh["limit"] + time_corr
+            out["times_s"][k] = ref
+            out["uncertainty_s"][k] = abs(mesh["correction"]) + abs(time_corr)
+            out["mesh"][k] = {"levels": levels, "times_s": tm, **mesh}
+            out["time"][k] = {"level": args.time_level, "tolerances": xs, "times_s": ys, **tl, "correction_at_level_tolerance": time_corr}
+        data["cases"][case] = out
+        args.out.write_text(json.dumps(data, indent=1) + "\n")
+        print(f"\n{case}: mesh ladder at tolerance {args.level_tolerance:g} (levels {levels}, dofs {[r['dofs'] for r in mesh_runs]}), time ladder at level {args.time_level}")
+        print("| rho | " + " | ".join(f"level {lv}" for lv in levels) + " | mesh order | mesh limit | time order | time correction | reference | uncertainty |")
+        print("|" + "---|" * (len(levels) + 7))
+        for x in marks:
+            k = f"{x:g}"
+            m, t = out["mesh"][k], out["time"][k]
+            po = "-" if m["order"] is None else f"{m['order']:.2f}"
+            qo = "-" if t["order"] is None else f"{t['order']:.2f}"
+            print(
+                f"| {k} | " + " | ".join(f"{v:.2f}" for v in m["times_s"]) + f" | {po} | {m['limit']:.2f} | {qo} | {t['correction_at_level_tolerance']:+.3f} | {out['times_s'][k]:.2f} | {100 * out['uncertainty_s'][k] / out['times_s'][k]:.2f} % |"
+            )
+    print(f"\nwrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,79 @@
+//! The linear algebra of a Newton iteration: `cargo bench -p tidens-solver`.
+//!
+//! On the real consistent tangent of the sc Ti-6Al-4V cell pressed to
+//! rho = 0.7 (10 MPa), at mesh levels 2, 3 and 4:
+//! - evaluation and assembly of the tangent (elements evaluated in parallel,
+//!   gathered into the equation system), in equations per second;
+//! - the numeric Cholesky factorisation (the symbolic one is reused), and
+//!   the LU factorisation of the same matrix that a non-symmetric element
+//!   (F-bar) would need, in equations per second;
+//! - one forward/backward solve with the factor, in equations per second.
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use std::hint::black_box;
+use tidens_solver::linear::LinearSolver;
+use tidens_solver::{
+    Cell, LoadHistory, MeshOptions, Preset, Scene, Settings, Simulation, SolverError,
+};
+
+/// The sc cell at 10 MPa, advanced until its density reaches `rho`.
+fn sc_pressed_to(level: u32, rho: f64) -> Result<Simulation, SolverError> {
+    let cell = Cell::sc(0.05, 1.0)?;
+    let scene = Scene::from_cell(
+        &cell,
+        &MeshOptions {
+            level,
+            ..MeshOptions::default()
+        },
+    )?;
+    let mut settings = Settings::new(LoadHistory {
+        stress: 10.0,
+        knockdown: 1.0,
+        ramp_time: 1.0,
+    });
+    settings.until_density = Some(rho);
+    settings.tolerance = 0.05;
+    let mut sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings)?;
+    sim.run(|_| true)?;
+    Ok(sim)
+}
+
+fn linear_algebra(c: &mut Criterion) {
+    let mut g = c.benchmark_group("sc_tangent");
+    g.sample_size(10);
+    for level in [2, 3, 4] {
+        let mut sim = sc_pressed_to(level, 0.7).expect("sc run");
+        let sys = sim.assemble_tangent(10.0).expect("tangent").clone();
+        let n = sys.dim();
+        let label = format!("level {level}, {n} equations, nnz {}", sys.nnz());
+        g.throughput(Throughput::Elements(n as u64));
+        g.bench_function(format!("evaluate_and_assemble/{label}"), |b| {
+            b.iter(|| black_box(sim.assemble_tangent(10.0).expect("tangent").nnz()))
+        });
+        let mut chol = LinearSolver::default();
+        chol.factorize(&sys).expect("factorisation");
+        g.bench_function(format!("cholesky/{label}"), |b| {
+            b.iter(|| black_box(chol.factorize(&sys).expect("factorisation")))
+        });
+        let rhs: Vec<f64> = (0..n).map(|k| (k as f64 * 0.1).sin()).collect();
+        g.bench_function(format!("solve/{label}"), |b| {
+            b.iter(|| {
+                let mut x = rhs.clone();
+                chol.solve(&mut x).expect("solve");
+                black_box(x)
+            })
+        });
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, sys.col_ptr(), None, sys.row_idx());
+        let mat = SparseColMatRef::new(sym, sys.values());
+        let symbolic = SymbolicLu::try_new(sym).expect("symbolic LU");
+        g.bench_function(format!("lu/{label}"), |b| {
+            b.iter(|| black_box(Lu::try_new_with_symbolic(symbolic.clone(), mat).expect("LU")))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, linear_algebra);
+criterion_main!(benches);

@@ -1,0 +1,217 @@
+//! The global tangent system: element tangents gathered over the body's dofs,
+//! mapped to equations through the contact state of the rigid planes, plus
+//! the particle-contact terms.
+//!
+//! Two stages. The element tangents are gathered in parallel into the
+//! dof-level pattern of the mesh ([`ElementAssembler`]: each entry summed
+//! over its elements in element order, the same bits with any thread count).
+//! The dof-level values are then mapped to equations serially, in dof order:
+//! a dof held on a fixed plane is eliminated (its row and column dropped, a
+//! unit diagonal kept), a dof held on the piston plane shares the piston's
+//! equation (its row and column summed into the piston's), a free dof keeps
+//! its own. The equation pattern covers every contact state (each element's
+//! dofs plus the piston's equation where a dof may follow the piston) and
+//! grows only for new particle-contact couplings, so its symbolic
+//! factorisation is reused across steps.
+
+use crate::constraints::Constraints;
+use crate::evaluation::Evaluation;
+use std::collections::BTreeSet;
+use tidens_contact::{ContactEvaluation, ParticleContact};
+use tidens_fem::{Body, DOF_DROPPED, ElementAssembler, SparseSystem};
+
+/// No slot: the entry is not in the pattern.
+const NO_SLOT: usize = usize::MAX;
+
+/// The equation system of a scene and the plan that fills it.
+pub struct Assembler {
+    /// Dof-level pattern and gather plan of the element tangents.
+    elements: ElementAssembler,
+    /// Dof-level values of the last gathered element tangents.
+    dof_values: Vec<f64>,
+    /// Equation cliques of the elements (their dofs, plus the piston's
+    /// equation where a dof may follow it).
+    element_cliques: Vec<Vec<usize>>,
+    /// Equation cliques of the particle-contact couplings added so far.
+    contact_cliques: BTreeSet<Vec<usize>>,
+    /// The equation-level system (body dofs, then the piston's equation).
+    system: SparseSystem,
+    /// For each dof-level slot `(r, c)`, the slot of `(r, c)` in `system`.
+    own_slot: Vec<usize>,
+    /// For each column `c`, the slot of `(piston, c)` in `system`.
+    piston_row: Vec<usize>,
+    /// For each row `r`, the slot of `(r, piston)` in `system`.
+    piston_column: Vec<usize>,
+    /// The slot of `(piston, piston)`.
+    piston_diagonal: usize,
+    /// Times the pattern grew for new particle-contact couplings.
+    pattern_rebuilds: usize,
+}
+
+impl Assembler {
+    /// The system of `body` under the plane constraints `constraints`.
+    pub fn new(body: &Body, constraints: &Constraints) -> Self {
+        let dofs: Vec<usize> = (0..body.element_count())
+            .flat_map(|e| body.element_dofs(e))
+            .collect();
+        let elements = ElementAssembler::new(body.dof_count(), 3 * body.kind().nodes(), &dofs);
+        let element_cliques = constraints.element_cliques(body);
+        let mut a = Self {
+            dof_values: vec![0.0; elements.nnz()],
+            elements,
+            element_cliques,
+            contact_cliques: BTreeSet::new(),
+            system: SparseSystem::from_cliques(0, std::iter::empty()),
+            own_slot: Vec::new(),
+            piston_row: Vec::new(),
+            piston_column: Vec::new(),
+            piston_diagonal: NO_SLOT,
+            pattern_rebuilds: 0,
+        };
+        a.rebuild();
+        a
+    }
+
+    /// The equation-level system last assembled.
+    pub fn system(&self) -> &SparseSystem {
+        &self.system
+    }
+
+    /// Times the pattern grew for new particle contacts.
+    pub fn pattern_rebuilds(&self) -> usize {
+        self.pattern_rebuilds
+    }
+
+    /// Internal force of the body (length `3 * nodes`) \[N\]: the element
+    /// forces gathered in parallel, each entry in element order.
+    pub fn internal_force(&self, body: &tidens_fem::BodyEvaluation) -> Vec<f64> {
+        let mut f = vec![0.0; self.elements.dim()];
+        self.elements.assemble_vector(body.residuals(), &mut f);
+        f
+    }
+
+    /// Builds the equation pattern and the slot maps from the cliques.
+    fn rebuild(&mut self) {
+        let n = self.elements.dim();
+        let cliques = self
+            .element_cliques
+            .iter()
+            .chain(self.contact_cliques.iter());
+        self.system = SparseSystem::from_cliques(n + 1, cliques.map(|c| c.as_slice()));
+        let (col_ptr, row_idx) = (self.elements.col_ptr(), self.elements.row_idx());
+        self.own_slot = (0..n)
+            .flat_map(|c| (col_ptr[c]..col_ptr[c + 1]).map(move |k| (row_idx[k], c)))
+            .map(|(r, c)| self.system.position(r, c).unwrap_or(NO_SLOT))
+            .collect();
+        self.piston_row = (0..n)
+            .map(|c| self.system.position(n, c).unwrap_or(NO_SLOT))
+            .collect();
+        self.piston_column = (0..n)
+            .map(|r| self.system.position(r, n).unwrap_or(NO_SLOT))
+            .collect();
+        self.piston_diagonal = self.system.position(n, n).unwrap_or(NO_SLOT);
+    }
+
+    /// Fills the system with the tangents of `eval` through the equation
+    /// map `map` (see [`Constraints::equation_map`]); eliminated dofs keep a
+    /// unit diagonal. False when a contact term fell outside the pattern
+    /// (grow it with [`Assembler::grow`] and assemble again).
+    pub fn assemble(&mut self, eval: &Evaluation, map: &[usize]) -> bool {
+        self.elements
+            .assemble_matrix(eval.body.tangents(), &mut self.dof_values);
+        self.system.clear();
+        let n = self.elements.dim();
+        let (col_ptr, row_idx) = (self.elements.col_ptr(), self.elements.row_idx());
+        let mut outside = 0;
+        for c in 0..n {
+            let mc = map[c];
+            if mc == DOF_DROPPED {
+                continue;
+            }
+            for k in col_ptr[c]..col_ptr[c + 1] {
+                let r = row_idx[k];
+                let mr = map[r];
+                let slot = match (mr == r, mc == c) {
+                    _ if mr == DOF_DROPPED => continue,
+                    (true, true) => self.own_slot[k],
+                    // A free row in the piston's column, and conversely.
+                    (true, false) => self.piston_column[r],
+                    (false, true) => self.piston_row[c],
+                    (false, false) => self.piston_diagonal,
+                };
+                if slot == NO_SLOT {
+                    outside += 1;
+                } else {
+                    self.system.add_at(slot, self.dof_values[k]);
+                }
+            }
+        }
+        for t in &eval.contact.terms {
+            outside += self.system.add_block(&t.dofs, &t.tangent, map);
+        }
+        for (d, &m) in map.iter().enumerate() {
+            if m != d {
+                self.system.add(d, d, 1.0);
+            }
+        }
+        outside == 0
+    }
+
+    /// Adds the couplings of the contact terms of `contact` to the pattern
+    /// (which only grows): each slave node with every facet around its
+    /// master facet, so that sliding onto a neighbouring facet needs no new
+    /// pattern. The symbolic factorisation must be redone after it.
+    pub fn grow(
+        &mut self,
+        contact: &ContactEvaluation,
+        particles: &ParticleContact,
+        constraints: &Constraints,
+    ) {
+        for t in &contact.terms {
+            let master = &particles.surfaces()[t.master.0];
+            let mut dofs: Vec<usize> = t.dofs[..3].to_vec();
+            for &f in master.ring(t.master.1) {
+                dofs.extend(
+                    master.quads[f]
+                        .iter()
+                        .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]),
+                );
+            }
+            dofs.sort_unstable();
+            dofs.dedup();
+            let mut clique = constraints.clique(&dofs);
+            clique.sort_unstable();
+            self.contact_cliques.insert(clique);
+        }
+        self.rebuild();
+        self.pattern_rebuilds += 1;
+    }
+
+    /// `K v` over the body dofs, for `v` given by its non-zero entries, from
+    /// the element tangents last gathered (by [`Assembler::assemble`] of
+    /// `eval`) and the contact tangents of `eval`.
+    pub fn tangent_times(&self, eval: &Evaluation, entries: &[(usize, f64)]) -> Vec<f64> {
+        let n = self.elements.dim();
+        let mut v = vec![0.0; n];
+        for &(d, x) in entries {
+            v[d] = x;
+        }
+        let mut out = vec![0.0; n];
+        let (col_ptr, row_idx) = (self.elements.col_ptr(), self.elements.row_idx());
+        for &(c, x) in entries {
+            for k in col_ptr[c]..col_ptr[c + 1] {
+                out[row_idx[k]] += self.dof_values[k] * x;
+            }
+        }
+        for t in &eval.contact.terms {
+            if t.dofs.iter().all(|&d| v[d] == 0.0) {
+                continue;
+            }
+            let m = t.dofs.len();
+            for (p, &dp) in t.dofs.iter().enumerate() {
+                out[dp] += (0..m).map(|q| t.tangent[p * m + q] * v[t.dofs[q]]).sum::<f64>();
+            }
+        }
+        out
+    }
+}

@@ -1,0 +1,388 @@
+//! Newton's method for one backward-Euler step, with the contact active set
+//! of the rigid planes, the particle-contact pairing and multipliers, and a
+//! factor of the tangent reused while it serves (modified Newton).
+//!
+//! The unknowns are the free body dofs and the piston displacement U. The
+//! residual is the internal force (elements and particle contact) gathered
+//! into equations, plus the piston's load `F(t)` in its equation (the load
+//! potential is `F U`). A step has converged when every entry is below
+//! `residual_tolerance` times the piston force, no node lies inside a
+//! plane, every node that touches another particle is paired, and the
+//! particle penetration is below its tolerance.
+
+use crate::evaluation::Evaluation;
+use crate::line_search::{self, Trial};
+use crate::simulation::Simulation;
+use tidens_contact::ContactEvaluation;
+use tidens_fem::DOF_DROPPED;
+
+/// Active-set updates of the rigid planes allowed in one step.
+const MAX_ACTIVE_SET_UPDATES: usize = 50;
+
+/// Augmented-Lagrangian updates of the particle-contact multipliers allowed
+/// in one step.
+const MAX_AUGMENTATIONS: usize = 30;
+
+/// A factor computed for a step this many times longer or shorter than the
+/// coming one is replaced by the tangent at the predictor: with the viscous
+/// stiffness scaling with the step, an older factor contracts too slowly
+/// (measured on the sc cell: a quarter fewer Newton iterations and
+/// evaluations than reusing it until Newton slows down).
+const FRESH_TANGENT_STEP_RATIO: f64 = 1.25;
+
+/// A converged Newton solve of one step.
+pub(crate) struct Solved {
+    pub u: Vec<f64>,
+    pub piston: f64,
+    pub eval: Evaluation,
+    pub iterations: usize,
+}
+
+/// A failed Newton solve.
+pub(crate) struct Failed {
+    pub reason: String,
+    pub iterations: usize,
+}
+
+/// A slave node of one surface pressed onto a facet of another: the
+/// tangent of a factor reused across iterations must have every such link.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct ContactLink {
+    /// Slave surface and node index in it.
+    slave: (usize, usize),
+    /// Master surface and facet.
+    master: (usize, usize),
+}
+
+/// What the current factor of the tangent was computed for: the equation
+/// map (the contact state of the planes) and the pressed particle-contact
+/// links. The factor may be reused while both are unchanged.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct FactorKey {
+    map: Vec<usize>,
+    links: Vec<ContactLink>,
+    /// The time step of the tangent [s].
+    dt: f64,
+}
+
+/// The pressed contact links of `contact`.
+fn links(contact: &ContactEvaluation) -> Vec<ContactLink> {
+    contact
+        .terms
+        .iter()
+        .filter(|t| t.pressure > 0.0)
+        .map(|t| ContactLink {
+            slave: t.slave,
+            master: t.master,
+        })
+        .collect()
+}
+
+fn max_abs(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+fn debug_enabled() -> bool {
+    std::env::var_os("TIDENS_DEBUG").is_some()
+}
+
+/// Displacements and the evaluation at a trial point of the line search.
+struct TrialPoint {
+    u: Vec<f64>,
+    piston: f64,
+    eval: Evaluation,
+}
+
+impl Simulation {
+    /// Global residual: internal forces gathered into equations, plus the
+    /// piston's load term `force` [N].
+    fn residual(&self, f_int: &[f64], map: &[usize], force: f64) -> Vec<f64> {
+        let n = self.constraints.dof_count();
+        let mut r = vec![0.0; n + 1];
+        for (d, &m) in map.iter().enumerate() {
+            if m != DOF_DROPPED {
+                r[m] += f_int[d];
+            }
+        }
+        r[n] += force;
+        r
+    }
+
+    /// The first guess of a step of `dt` [s]: the displacement extrapolated
+    /// from the last two steps. On creep flow it is far closer to the
+    /// solution than the last state (even where stiff elasticity makes its
+    /// residual larger).
+    fn predict(&self, dt: f64) -> (Vec<f64>, f64) {
+        let state = &self.state;
+        let mut u = state.u.clone();
+        let mut piston = state.piston;
+        let quadratic = std::env::var_os("TIDENS_PREDICTOR2").is_some();
+        if self.settings.newton.extrapolate
+            && let Some(prev) = &state.previous
+        {
+            match &state.before_previous {
+                Some(pp) if quadratic => {
+                    // Lagrange extrapolation through the last three states.
+                    let (h1, h2, h) = (pp.dt, prev.dt, dt);
+                    let w2 = (h + h2 + h1) * (h + h2) / ((h2 + h1) * h2);
+                    let w1 = -(h + h2 + h1) * h / (h1 * h2);
+                    let w0 = (h + h2) * h / (h1 * (h2 + h1));
+                    for ((x, xp), xpp) in u.iter_mut().zip(&prev.u).zip(&pp.u) {
+                        *x = w2 * *x + w1 * xp + w0 * xpp;
+                    }
+                    piston = w2 * piston + w1 * prev.piston + w0 * pp.piston;
+                }
+                _ => {
+                    let ratio = dt / prev.dt;
+                    for (x, xp) in u.iter_mut().zip(&prev.u) {
+                        *x += ratio * (*x - xp);
+                    }
+                    piston += ratio * (piston - prev.piston);
+                }
+            }
+        }
+        self.constraints.enforce(&mut u, piston);
+        (u, piston)
+    }
+
+    /// Assembles the tangent of `eval` (growing the pattern for new contact
+    /// couplings) and factorises it.
+    fn refactor(&mut self, eval: &Evaluation, map: &[usize], dt: f64) -> Result<(), String> {
+        let t0 = std::time::Instant::now();
+        if !self.assembler.assemble(eval, map) {
+            if let Some(c) = &self.contact {
+                self.assembler.grow(&eval.contact, c, &self.constraints);
+            }
+            self.linear.reset_pattern();
+            self.assembler.assemble(eval, map);
+        }
+        let t1 = std::time::Instant::now();
+        self.stats.assembly_seconds += (t1 - t0).as_secs_f64();
+        let factorized = self.linear.factorize(self.assembler.system());
+        self.stats.linear_seconds += t1.elapsed().as_secs_f64();
+        match factorized {
+            Ok(_) => {
+                self.factor = Some(FactorKey {
+                    map: map.to_vec(),
+                    links: links(&eval.contact),
+                    dt,
+                });
+                Ok(())
+            }
+            Err(e) => {
+                self.factor = None;
+                Err(e.to_string())
+            }
+        }
+    }
+
+    /// Newton with line search for the step to `time + dt`.
+    ///
+    /// The factor of the tangent is kept across iterations and steps while
+    /// the equation map (the contact state) and the pressed contact links
+    /// are unchanged and Newton contracts the residual fast enough with it
+    /// (modified Newton); otherwise the tangent is assembled and factorised
+    /// afresh. The tangent is computed only in evaluations that may need it.
+    pub(crate) fn solve_step(&mut self, dt: f64) -> Result<Solved, Failed> {
+        let t1 = self.state.time + dt;
+        let force = self.full_force * self.settings.load.factor(t1);
+        let tol = self.settings.newton.residual_tolerance * force.max(1e-3 * self.full_force);
+        let gap_tol = 1e-8 * self.lengths.iter().cloned().fold(0.0, f64::max);
+        let n = self.constraints.dof_count();
+        self.constraints.reset_flips();
+        let fail = |reason: String, iterations: usize| Failed { reason, iterations };
+        let (mut u, mut piston) = self.predict(dt);
+        if debug_enabled() {
+            eprintln!("  step from t = {:.6e} s, dt = {dt:.4e} s", self.state.time);
+        }
+        // Particle contact keeps each node's master facet for the whole step.
+        self.pair_contacts(&u, false);
+        // The viscous part of the tangent scales with the step: a factor
+        // from a step of another size contracts slowly, so the tangent is
+        // computed at the predictor right away.
+        let stale = self
+            .factor
+            .as_ref()
+            .is_none_or(|k| (dt / k.dt).ln().abs() > FRESH_TANGENT_STEP_RATIO.ln());
+        let mut eval = self.evaluate(&u, dt, stale).map_err(|e| fail(e, 0))?;
+        let mut refactor = stale || !self.linear.has_factor();
+        let mut iterations = 0;
+        let mut active_set_updates = 0;
+        let mut augmentations = 0;
+        loop {
+            // Contact: release tensile contacts, catch penetrating nodes.
+            if active_set_updates < MAX_ACTIVE_SET_UPDATES
+                && self
+                    .constraints
+                    .update(&u, piston, &eval.f_int, tol, gap_tol)
+                    > 0
+            {
+                active_set_updates += 1;
+            }
+            let map = self.constraints.equation_map();
+            // Nodes that have just come into contact are still off their
+            // plane: the next solve moves them onto it.
+            let offsets = self.constraints.offsets(&u, piston);
+            let r = self.residual(&eval.f_int, &map, force);
+            let r_norm = max_abs(&r);
+            if debug_enabled() {
+                eprintln!(
+                    "    it {iterations} |R| {r_norm:.3e} tol {tol:.3e} refactor {refactor} planes {:?} particle contacts {} penetration {:.2e}",
+                    self.constraints.contact_counts(),
+                    eval.contact.terms.len(),
+                    eval.contact.max_penetration()
+                );
+            }
+            if !r_norm.is_finite() {
+                return Err(fail("non-finite residual".into(), iterations));
+            }
+            if offsets.is_empty() && r_norm <= tol {
+                let penetration = self.constraints.max_penetration(&u, piston);
+                if penetration > gap_tol {
+                    return Err(fail(
+                        format!("converged with a node {penetration:.3e} mm inside a rigid plane"),
+                        iterations,
+                    ));
+                }
+                // Nodes that came near another particle during the step are
+                // paired now; if any of them touches, Newton goes on.
+                if self.pair_contacts(&u, true) > 0 {
+                    eval = self
+                        .evaluate(&u, dt, false)
+                        .map_err(|e| fail(e, iterations))?;
+                    continue;
+                }
+                // The multipliers take each converged step's pressures (see
+                // `accept_or_reject`), so the penetration of a step is only
+                // the pressure change over it divided by the penalty; the
+                // augmentation loop here is for steps where that is too much.
+                let violation = eval.contact.max_violation();
+                if violation <= self.penetration_tol {
+                    return Ok(Solved {
+                        u,
+                        piston,
+                        eval,
+                        iterations,
+                    });
+                }
+                if augmentations >= MAX_AUGMENTATIONS {
+                    return Err(fail(
+                        format!(
+                            "particle contact penetration {violation:.3e} mm after {MAX_AUGMENTATIONS} augmentations"
+                        ),
+                        iterations,
+                    ));
+                }
+                augmentations += 1;
+                let x = self.current_coordinates(&u);
+                if let Some(c) = self.contact.as_mut() {
+                    c.augment(&x, &eval.contact);
+                }
+                eval = self
+                    .evaluate(&u, dt, false)
+                    .map_err(|e| fail(e, iterations))?;
+                continue;
+            }
+            if iterations >= self.settings.newton.max_iterations {
+                return Err(fail(
+                    format!(
+                        "{iterations} Newton iterations, residual {r_norm:.3e} N > {tol:.3e} N"
+                    ),
+                    iterations,
+                ));
+            }
+            iterations += 1;
+            let key_changed = self
+                .factor
+                .as_ref()
+                .is_none_or(|k| k.map != map || k.links != links(&eval.contact));
+            if refactor || key_changed || !offsets.is_empty() {
+                if !eval.has_tangent() {
+                    eval = self
+                        .evaluate(&u, dt, true)
+                        .map_err(|e| fail(e, iterations))?;
+                }
+                self.refactor(&eval, &map, dt)
+                    .map_err(|e| fail(e, iterations))?;
+            }
+            let mut du: Vec<f64> = r.iter().map(|x| -x).collect();
+            if !offsets.is_empty() {
+                // The linearised effect of the offsets: minus the tangent
+                // times them, gathered like the residual.
+                let lift = self.assembler.tangent_times(&eval, &offsets);
+                for (d, &m) in map.iter().enumerate() {
+                    if m != DOF_DROPPED {
+                        du[m] -= lift[d];
+                    }
+                }
+            }
+            let t0 = std::time::Instant::now();
+            let solved = self.linear.solve(&mut du);
+            self.stats.linear_seconds += t0.elapsed().as_secs_f64();
+            solved.map_err(|e| fail(e.to_string(), iterations))?;
+            let r0_sq: f64 = r.iter().map(|x| x * x).sum();
+            let best = line_search::backtrack(r0_sq, tol, |s| {
+                let mut ut = u.clone();
+                for d in 0..n {
+                    if map[d] == d {
+                        ut[d] += s * du[d];
+                    }
+                }
+                let pt = piston + s * du[n];
+                self.constraints.enforce(&mut ut, pt);
+                let ev = self.evaluate(&ut, dt, false).ok()?;
+                let rt = self.residual(&ev.f_int, &map, force);
+                let norm_sq = rt.iter().map(|x| x * x).sum();
+                Some((
+                    norm_sq,
+                    max_abs(&rt),
+                    TrialPoint {
+                        u: ut,
+                        piston: pt,
+                        eval: ev,
+                    },
+                ))
+            });
+            let Some(Trial {
+                step, norm, point, ..
+            }) = best
+            else {
+                return Err(fail(
+                    "every line-search point inverts an element".into(),
+                    iterations,
+                ));
+            };
+            if debug_enabled() {
+                eprintln!("      line search: step {step} |R| {norm:.3e}");
+            }
+            // Modified Newton pays only while it contracts fast: refactorise
+            // after a slow or damped iteration.
+            refactor = norm > 0.2 * r_norm || step < 1.0;
+            u = point.u;
+            piston = point.piston;
+            eval = point.eval;
+        }
+    }
+
+    /// Pairs the surface nodes with master facets at displacement `u`: all
+    /// of them at the start of a step (keeping the facets of the last step
+    /// where they still fit), or only those not paired yet (`unpaired_only`,
+    /// at convergence). Returns how many newly paired nodes touch.
+    fn pair_contacts(&mut self, u: &[f64], unpaired_only: bool) -> usize {
+        if self.contact.is_none() {
+            return 0;
+        }
+        let t0 = std::time::Instant::now();
+        let x = self.current_coordinates(u);
+        let touching = match self.contact.as_mut() {
+            Some(c) if unpaired_only => c.pair_unpaired(&x),
+            Some(c) => {
+                c.pair(&x);
+                0
+            }
+            None => 0,
+        };
+        self.stats.contact_seconds += t0.elapsed().as_secs_f64();
+        touching
+    }
+}

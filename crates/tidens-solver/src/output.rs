@@ -1,0 +1,184 @@
+//! What a run reports: the densification curve (one point per converged
+//! step), the node and element fields of the last converged state, and the
+//! run's totals.
+
+use crate::linear::FactorizationCounts;
+use crate::simulation::Simulation;
+use serde::{Deserialize, Serialize};
+use tidens_fem::ElementFields;
+
+/// One converged step of the densification curve.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CurvePoint {
+    /// Time [s].
+    pub time: f64,
+    /// Relative density: particle volume over current cell volume.
+    pub rel_density: f64,
+    /// Piston displacement U [mm] (negative in compression).
+    pub piston_displacement: f64,
+    /// Applied nominal stress sigma(t) [MPa].
+    pub applied_stress: f64,
+    /// Stress acting on the cell, f sigma(t) [MPa].
+    pub cell_stress: f64,
+    /// Step number (0 for the initial state).
+    pub step: usize,
+    /// Newton iterations of this step (cut-back attempts included).
+    pub newton_iterations: usize,
+    /// Newton iterations since the start.
+    pub newton_total: usize,
+    /// Time step [s].
+    pub dt: f64,
+    /// Largest equivalent plastic strain increment at a Gauss point.
+    pub max_strain_increment: f64,
+    /// Current particle volume [mm^3].
+    pub particle_volume: f64,
+    /// Estimated error of `time` from the time discretisation [s]: the sum of
+    /// the per-step backward-Euler errors (positive when `time` is late).
+    pub time_error: f64,
+    /// Surface dofs in contact with a rigid plane.
+    pub contacts: usize,
+    /// Surface nodes pressed against another particle (each contact pass
+    /// counts its slave nodes that carry pressure; tied: nodes tied).
+    pub particle_contacts: usize,
+    /// Largest penetration of a surface node into a rigid plane or into
+    /// another particle [mm].
+    pub max_penetration: f64,
+}
+
+/// Why a run stopped, or that it goes on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Status {
+    Running,
+    ReachedDensity,
+    ReachedTime,
+}
+
+/// Node and element fields of the last converged state, for output.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fields {
+    /// Current node coordinates [mm].
+    pub points: Vec<[f64; 3]>,
+    /// Node displacements [mm].
+    pub displacement: Vec<[f64; 3]>,
+    /// Force exerted by the rigid planes on each node [N].
+    pub contact_force: Vec<[f64; 3]>,
+    /// Particle-particle contact pressure at each node [MPa] (0 where none).
+    pub contact_pressure: Vec<f64>,
+    /// Hexahedra (VTK order).
+    pub cells: Vec<[usize; 8]>,
+    /// Element nodes (VTK order) of every element, whatever its kind.
+    pub connectivity: Vec<Vec<usize>>,
+    /// The cell type name in VTK/meshio (`hexahedron` or `tetra10`).
+    pub cell_type: &'static str,
+    /// Element fields (von Mises, mean stress, equivalent plastic strain).
+    pub element: ElementFields,
+}
+
+/// Totals of a run so far.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RunStats {
+    pub steps: usize,
+    pub newton_iterations: usize,
+    pub rejected_steps: usize,
+    pub failed_attempts: usize,
+    pub factorizations: FactorizationCounts,
+    /// Evaluations of the body (and contact), and how many of them with
+    /// tangents.
+    pub evaluations: usize,
+    pub tangent_evaluations: usize,
+    /// Wall time in element evaluations (residual and tangent) [s].
+    pub evaluation_seconds: f64,
+    /// Wall time in particle contact: pairing nodes with facets (the parry
+    /// search) and evaluating the contact terms [s].
+    pub contact_seconds: f64,
+    /// Wall time gathering element and contact tangents into the sparse
+    /// system [s].
+    pub assembly_seconds: f64,
+    /// Wall time in sparse factorisations and solves [s].
+    pub linear_seconds: f64,
+    /// Times the sparsity pattern grew for new particle contacts.
+    pub pattern_rebuilds: usize,
+}
+
+impl Simulation {
+    /// The curve point of the current (last converged) state.
+    pub(crate) fn curve_point(
+        &self,
+        volume: f64,
+        step: usize,
+        iterations: usize,
+        dt: f64,
+        max_dp: f64,
+    ) -> CurvePoint {
+        let load = &self.settings.load;
+        let state = &self.state;
+        CurvePoint {
+            time: state.time,
+            rel_density: self.density_of(volume, state.piston),
+            piston_displacement: state.piston,
+            applied_stress: load.applied_stress(state.time),
+            cell_stress: load.cell_stress(state.time),
+            step,
+            newton_iterations: iterations,
+            newton_total: self.stats.newton_iterations,
+            dt,
+            max_strain_increment: max_dp,
+            particle_volume: volume,
+            time_error: self.control.time_error(),
+            contacts: self.constraints.contact_counts().iter().sum(),
+            particle_contacts: state
+                .contact
+                .terms
+                .iter()
+                .filter(|t| t.pressure > 0.0)
+                .count(),
+            max_penetration: self
+                .constraints
+                .max_penetration(&state.u, state.piston)
+                .max(state.contact.max_penetration()),
+        }
+    }
+
+    /// Fields of the last converged state.
+    pub fn fields(&self) -> Fields {
+        let nodes = self.body.nodes();
+        let state = &self.state;
+        let mut points = Vec::with_capacity(nodes.len());
+        let mut displacement = Vec::with_capacity(nodes.len());
+        let mut contact_force = Vec::with_capacity(nodes.len());
+        for (a, p) in nodes.iter().enumerate() {
+            let u = [state.u[3 * a], state.u[3 * a + 1], state.u[3 * a + 2]];
+            points.push([p[0] + u[0], p[1] + u[1], p[2] + u[2]]);
+            displacement.push(u);
+            contact_force.push([0, 1, 2].map(|i| {
+                let d = 3 * a + i;
+                if self.constraints.is_held(d) {
+                    state.f_int[d]
+                } else {
+                    0.0
+                }
+            }));
+        }
+        let mut contact_pressure = vec![0.0; nodes.len()];
+        if let Some(c) = &self.contact {
+            for t in &state.contact.terms {
+                let node = c.surfaces()[t.slave.0].nodes[t.slave.1];
+                contact_pressure[node] = f64::max(contact_pressure[node], t.pressure);
+            }
+        }
+        Fields {
+            points,
+            displacement,
+            contact_force,
+            contact_pressure,
+            cells: (0..self.body.element_count())
+                .filter_map(|e| <[usize; 8]>::try_from(self.body.element_nodes(e)).ok())
+                .collect(),
+            connectivity: (0..self.body.element_count())
+                .map(|e| self.body.element_nodes(e).to_vec())
+                .collect(),
+            cell_type: self.body.kind().vtk_name(),
+            element: state.fields.clone(),
+        }
+    }
+}

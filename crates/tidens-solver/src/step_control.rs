@@ -1,0 +1,170 @@
+//! Adaptive time steps for backward Euler, driven by an estimate of each
+//! step's error in time.
+//!
+//! Backward Euler evaluates the densification rate at the end of a step, so
+//! the time it takes to reach a density is off by about half the step times
+//! the change of the log of the rate over it. During the ramp a time shift
+//! counts at the reduced load, so the change is weighted by the load factor
+//! to the n (`(sigma/sigma_max)^n`). Steps are sized so that this error per
+//! unit time stays below the tolerance; the sum of the signed per-step
+//! errors is the run's estimate of its time error.
+//!
+//! The rate also jumps when a node touches a plane: such a jump is in the
+//! past once seen, so the step is steered by the trend of the rate over the
+//! last few steps ([`RATE_WINDOW`]) rather than by the last change alone.
+//! Only the plastic-strain-increment limit (a robustness bound for Newton)
+//! rejects a step.
+
+use std::collections::VecDeque;
+
+/// Steps over which the trend of the densification rate is measured.
+pub const RATE_WINDOW: usize = 4;
+
+/// A step of less than this piston strain says nothing reliable of the rate
+/// (the Newton tolerance leaves noise of 1e-10 or so, and contact events
+/// make it jumpy): it lets the step grow, and what it could get wrong is
+/// bounded by its own tiny strain.
+const MOVED_STRAIN: f64 = 1e-6;
+
+/// One accepted step's contribution to the windowed rate trend.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct RateSample {
+    /// Step [s].
+    dt: f64,
+    /// Weighted |change of ln rate| over the step.
+    change: f64,
+}
+
+/// What the controller makes of a converged step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepAssessment {
+    /// Step [s].
+    pub dt: f64,
+    /// Piston log-strain rate over the step [1/s].
+    rate: f64,
+    /// True when the step moved enough to measure the rate.
+    moved: bool,
+    /// Weighted change of ln rate since the last measured step.
+    dln: f64,
+    /// Largest plastic strain increment over the allowed one.
+    psi_dp: f64,
+    /// Estimated signed error of the step in time [s] (positive: late).
+    pub error: f64,
+}
+
+/// The step-size controller and its memory of the rate.
+#[derive(Clone, Debug)]
+pub struct StepController {
+    tolerance: f64,
+    max_strain_increment: f64,
+    dt_min: f64,
+    /// Rate of the last step that moved [1/s].
+    last_rate: Option<f64>,
+    history: VecDeque<RateSample>,
+    /// The step to try next [s].
+    dt_next: f64,
+    /// Sum of the signed per-step error estimates [s].
+    time_error: f64,
+}
+
+impl StepController {
+    /// A controller aiming at `tolerance` error per unit time, rejecting
+    /// steps whose plastic strain increment exceeds twice
+    /// `max_strain_increment`, starting with `dt0` [s].
+    pub fn new(tolerance: f64, max_strain_increment: f64, dt0: f64, dt_min: f64) -> Self {
+        Self {
+            tolerance,
+            max_strain_increment,
+            dt_min,
+            last_rate: None,
+            history: VecDeque::with_capacity(RATE_WINDOW),
+            dt_next: dt0,
+            time_error: 0.0,
+        }
+    }
+
+    /// The controller's proposal for the next step [s].
+    pub fn dt_next(&self) -> f64 {
+        self.dt_next
+    }
+
+    /// Smallest step before giving up [s].
+    pub fn dt_min(&self) -> f64 {
+        self.dt_min
+    }
+
+    /// Estimated time error accumulated so far [s].
+    pub fn time_error(&self) -> f64 {
+        self.time_error
+    }
+
+    /// Judges a converged step of `dt` [s] whose piston log-strain rate was
+    /// `rate` [1/s], at load factor to the n `weight`, with largest plastic
+    /// strain increment `max_dp`: the assessment to accept it with, or the
+    /// shorter step to retry it with.
+    pub fn assess(&self, dt: f64, rate: f64, weight: f64, max_dp: f64) -> Result<StepAssessment, f64> {
+        let moved = (rate * dt).abs() > MOVED_STRAIN;
+        let dln = match self.last_rate {
+            Some(r0) if moved && r0 > 0.0 && rate > 0.0 => (r0 / rate).ln() * weight,
+            _ => 0.0,
+        };
+        let psi_dp = max_dp / self.max_strain_increment;
+        if psi_dp > 2.0 && dt > 4.0 * self.dt_min {
+            return Err(dt * (0.8 / psi_dp).max(0.1));
+        }
+        Ok(StepAssessment {
+            dt,
+            rate,
+            moved,
+            dln,
+            psi_dp,
+            error: 0.5 * dt * dln,
+        })
+    }
+
+    /// Records an accepted step that took `iterations` Newton iterations and
+    /// proposes the next step.
+    pub fn accept(&mut self, a: &StepAssessment, iterations: usize) {
+        self.time_error += a.error;
+        let had_rate = self.last_rate.is_some();
+        if a.moved && a.rate > 0.0 {
+            self.last_rate = Some(a.rate);
+        }
+        if a.moved && had_rate {
+            if self.history.len() == RATE_WINDOW {
+                self.history.pop_front();
+            }
+            self.history.push_back(RateSample {
+                dt: a.dt,
+                change: a.dln.abs(),
+            });
+        }
+        // Newton effort limits the growth only when it is large (modified
+        // Newton takes a few more, cheaper, iterations than full Newton).
+        let newton_factor: f64 = match iterations {
+            0..=8 => 2.0,
+            9..=15 => 1.2,
+            _ => 0.7,
+        };
+        // The step for which half the windowed rate-change speed times the
+        // step equals the tolerance: the error per unit step is `tolerance`.
+        let (span, change) = self
+            .history
+            .iter()
+            .fold((0.0, 0.0), |(s, c), r| (s + r.dt, c + r.change));
+        let accuracy_dt = if a.moved && change > 0.0 {
+            0.9 * 2.0 * self.tolerance * span / change
+        } else {
+            f64::INFINITY
+        };
+        let dp_dt = if a.psi_dp > 0.0 {
+            0.9 * a.dt / a.psi_dp
+        } else {
+            f64::INFINITY
+        };
+        self.dt_next = (newton_factor * a.dt)
+            .min(accuracy_dt)
+            .min(dp_dt)
+            .clamp(0.25 * a.dt, 2.0 * a.dt);
+    }
+}
