@@ -13,6 +13,7 @@ pub fn sc_pressed_to(level: u32, rho: f64) -> Result<Simulation, SolverError> {
         &MeshOptions {
             level,
             grading: 1.0,
+            ..MeshOptions::default()
         },
     )?;
     let mut settings = Settings::new(LoadHistory {
