@@ -72,7 +72,7 @@
 //! a trilinear element's volume is cubic in its coordinates); it is
 //! continuous and increasing for the small offsets here, and
 //! [`solve_increasing`] finds `V(lambda) = pi a^2 c / 6` by the Illinois
-//! variant of the secant method on a bracket (4 to 8 volume evaluations).
+//! variant of the secant method on a bracket (6 to 8 volume evaluations).
 //! On the coarsest graded layouts (2 divisions, grading > 1) almost every
 //! surface node is a special point or capped, the target cannot be reached,
 //! and the fit fails with [`MeshError::VolumeFit`].
