@@ -178,6 +178,8 @@ struct Builder {
     radial: Vec<f64>,
     slots: Vec<usize>,
     nodes: Vec<[f64; 3]>,
+    /// Canonical key of each node, in node order.
+    keys: Vec<Key>,
 }
 
 const NONE: usize = usize::MAX;
@@ -203,6 +205,7 @@ impl Builder {
             radial,
             slots: vec![NONE; slot_count],
             nodes: Vec::new(),
+            keys: Vec::new(),
         }
     }
 
@@ -258,6 +261,7 @@ impl Builder {
             self.slots[slot] = self.nodes.len();
             let p = self.position(key);
             self.nodes.push(p);
+            self.keys.push(key);
         }
         self.slots[slot]
     }
@@ -283,8 +287,30 @@ fn face(element: &[usize; 8], local: usize, index: usize, kind: FaceKind) -> Bou
     }
 }
 
+/// Where a node sits on the construction ray of a surface node: the shell
+/// node at radial parameter `t` on the ray of direction `D` is
+/// `(1 - t) inner(D) + t surface(D)`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct RayPlace {
+    /// Index of the surface node at the outer end of the ray.
+    pub surface: usize,
+    /// Radial parameter: 0 on the inner block's outer face, 1 on the surface.
+    pub t: f64,
+}
+
+/// An octant mesh with the construction data that moving its surface needs.
+pub(crate) struct OctantMesh {
+    pub mesh: HexMesh,
+    /// Per node, its place on a construction ray; `None` inside the inner block.
+    pub rays: Vec<Option<RayPlace>>,
+    /// The seven special surface nodes (directions whose indices are all 0 or
+    /// n): the three poles, the diagonal point and the three face-diagonal
+    /// points.
+    pub special: Vec<usize>,
+}
+
 /// Builds the octant mesh for a validated layout.
-pub(crate) fn build(layout: OctantLayout) -> HexMesh {
+pub(crate) fn build(layout: OctantLayout) -> OctantMesh {
     let (n, m) = (layout.n, layout.m);
     let mut b = Builder::new(layout);
     let mut elements = Vec::with_capacity(n * n * n + 3 * n * n * m);
@@ -341,10 +367,37 @@ pub(crate) fn build(layout: OctantLayout) -> HexMesh {
         }
     }
 
-    HexMesh {
-        nodes: b.nodes,
-        elements,
-        boundary,
+    let surface_node =
+        |dir: [usize; 3]| Some(b.slots[b.slot(Key::Shell(m, dir))]).filter(|&i| i != NONE);
+    let rays = b
+        .keys
+        .iter()
+        .map(|key| match *key {
+            Key::Inner(_) => None,
+            Key::Shell(s, dir) => surface_node(dir).map(|surface| RayPlace {
+                surface,
+                t: b.radial[s],
+            }),
+        })
+        .collect();
+    let special = b
+        .keys
+        .iter()
+        .enumerate()
+        .filter(|(_, key)| match key {
+            Key::Shell(s, dir) => *s == m && dir.iter().all(|&d| d == 0 || d == n),
+            Key::Inner(_) => false,
+        })
+        .map(|(i, _)| i)
+        .collect();
+    OctantMesh {
+        mesh: HexMesh {
+            nodes: b.nodes,
+            elements,
+            boundary,
+        },
+        rays,
+        special,
     }
 }
 
@@ -379,6 +432,51 @@ mod tests {
         for r in [0.25, 0.5, 2.0, 4.0] {
             let s = OctantShape::for_aspect(r);
             assert!(s.h * s.z_stretch <= 0.66 + 1e-12 && (0.35..=0.65).contains(&s.inflation));
+        }
+    }
+
+    #[test]
+    fn rays_end_on_their_surface_node_and_seven_nodes_are_special() {
+        for (n, grading, c) in [(2, 1.0, 1.0), (5, 3.0, 0.5), (8, 1.0, 2.0)] {
+            let shape = OctantShape::for_aspect(c);
+            let built = build(OctantLayout::new(1.0, c, n, grading, shape));
+            let mesh = &built.mesh;
+            assert_eq!(built.rays.len(), mesh.nodes.len());
+            for f in mesh.boundary.iter().filter(|f| f.kind == FaceKind::Curved) {
+                for &k in &f.nodes {
+                    assert_eq!(built.rays[k], Some(RayPlace { surface: k, t: 1.0 }));
+                }
+            }
+            for (k, ray) in built.rays.iter().enumerate() {
+                if let Some(RayPlace { surface, t }) = *ray {
+                    assert!((0.0..=1.0).contains(&t));
+                    assert_eq!(t == 1.0, surface == k, "node {k}");
+                }
+            }
+            // The centre is in the inner block.
+            let centre = mesh.nodes.iter().position(|p| *p == [0.0; 3]);
+            assert_eq!(centre.map(|k| built.rays[k]), Some(None));
+            let mut special: Vec<[f64; 3]> = built.special.iter().map(|&k| mesh.nodes[k]).collect();
+            special.sort_by(|p, q| p.partial_cmp(q).unwrap_or(std::cmp::Ordering::Equal));
+            let s2 = std::f64::consts::FRAC_1_SQRT_2;
+            let s3 = 1.0 / 3f64.sqrt();
+            let mut want = [
+                [1.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0],
+                [0.0, 0.0, c],
+                [s3, s3, c * s3],
+                [s2, s2, 0.0],
+                [s2, 0.0, c * s2],
+                [0.0, s2, c * s2],
+            ];
+            want.sort_by(|p, q| p.partial_cmp(q).unwrap_or(std::cmp::Ordering::Equal));
+            assert_eq!(special.len(), 7);
+            for (p, q) in special.iter().zip(&want) {
+                assert!(
+                    (0..3).all(|r| (p[r] - q[r]).abs() < 1e-15),
+                    "{p:?} vs {q:?}"
+                );
+            }
         }
     }
 

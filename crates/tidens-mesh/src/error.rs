@@ -79,6 +79,22 @@ pub enum MeshError {
     /// Mesh refinement level.
     #[error("level = {0}: must be in 1..={MAX_LEVEL}")]
     Level(u32),
+    /// The outward surface offset that gives an octant mesh its exact volume
+    /// was not found: the volume could not be brought within the tolerance.
+    /// It happens on the coarsest graded layouts (2 divisions, grading > 1),
+    /// where the offsets are held back next to the contact points.
+    #[error(
+        "exact-volume octant mesh: volume {volume} mm^3, target {target} mm^3 \
+         (relative tolerance {tolerance})"
+    )]
+    VolumeFit {
+        /// Volume of the closest mesh found \[mm^3\].
+        volume: f64,
+        /// Exact volume pi a^2 c / 6 of the octant \[mm^3\].
+        target: f64,
+        /// Largest relative volume error accepted.
+        tolerance: f64,
+    },
 }
 
 /// True when `v` is a usable length: finite and strictly positive.

@@ -3,6 +3,8 @@
 //! boxes for verification tests. Lengths are in mm.
 //!
 //! - [`HexMesh`]: trilinear hexahedra ("cubed octant", [`hex`]).
+//!   [`HexMesh::spheroid_octant_exact_volume`] moves the curved-surface
+//!   nodes outward by O(h^2) so that the mesh has the octant's exact volume.
 //! - [`TetMesh`]: quadratic 10-node tetrahedra ([`tet10`]) cut conformingly
 //!   from the hexahedra, with mid-edge nodes on the true curved surface.
 //!
@@ -13,6 +15,11 @@
 //! let exact = std::f64::consts::PI * 0.05 * 0.05 * 0.04 / 6.0;
 //! assert!((mesh.volume() - exact).abs() < 0.01 * exact);
 //! assert!(mesh.min_scaled_jacobian() > 0.2);
+//!
+//! // Same nodes and elements, surface moved outward: the exact volume.
+//! let fitted = HexMesh::spheroid_octant_exact_volume(&spec)?;
+//! assert_eq!(fitted.elements, mesh.elements);
+//! assert!((fitted.volume() - exact).abs() < 1e-12 * exact);
 //!
 //! // The same octant in quadratic tetrahedra: 6 per hexahedron, curved faces
 //! // on the true spheroid, volume error O(h^4).
@@ -26,6 +33,7 @@
 mod block;
 mod cubed_octant;
 mod error;
+mod exact_volume;
 mod grading;
 pub mod hex;
 mod hex_split;
@@ -37,6 +45,7 @@ mod transform;
 
 pub use cubed_octant::{OctantShape, radial_divisions};
 pub use error::{MAX_BLOCK_DIVISIONS, MAX_LEVEL, MAX_OCTANT_DIVISIONS, MeshError};
+pub use exact_volume::EXACT_VOLUME_TOLERANCE;
 pub use tet_mesh::{TetBoundaryFace, TetMesh, project_to_spheroid};
 
 use error::is_positive_length;
@@ -124,6 +133,10 @@ impl HexMesh {
     /// face-diagonal surface points are nodes; surface nodes lie on the spheroid
     /// to rounding. The layout is [`OctantShape::for_aspect`]`(c / a)` with
     /// [`radial_divisions`] radial layers.
+    ///
+    /// The bilinear surface facets lie inside the convex spheroid, so the
+    /// mesh volume falls short of pi a^2 c / 6 by O(h^2);
+    /// [`HexMesh::spheroid_octant_exact_volume`] removes that deficit.
     pub fn spheroid_octant(spec: &OctantSpec) -> Result<HexMesh, MeshError> {
         spec.validate()?;
         Self::spheroid_octant_with_shape(spec, &OctantShape::for_aspect(spec.c / spec.a))
@@ -141,7 +154,48 @@ impl HexMesh {
         shape.validate()?;
         let layout =
             cubed_octant::OctantLayout::new(spec.a, spec.c, spec.divisions, spec.grading, *shape);
-        Ok(cubed_octant::build(layout))
+        Ok(cubed_octant::build(layout).mesh)
+    }
+
+    /// Like [`HexMesh::spheroid_octant`] (same nodes, elements and boundary,
+    /// in the same order), with the curved-surface nodes moved slightly
+    /// outward so that the mesh volume is the octant's exact volume
+    /// pi a^2 c / 6 \[mm^3\] (to a relative [`EXACT_VOLUME_TOLERANCE`]).
+    ///
+    /// Each surface node moves along its ray from the particle centre by an
+    /// amount proportional to the sagitta of the bilinear facets around it,
+    /// one common factor (about 2/3) making the volume exact; the shell nodes
+    /// beneath it move in proportion to their radial position, the inner
+    /// block stays. The offsets are O(h^2), a small fraction of the element
+    /// size. The poles, the diagonal point and the three face-diagonal points
+    /// do not move (they stay exactly on the spheroid, where particles touch
+    /// rigid planes and each other at the start), every node stays at most
+    /// halfway from the spheroid to the tangent plane at each of them (so
+    /// particles touching there cannot overlap), and nodes on the planes
+    /// x = 0, y = 0, z = 0 stay exactly on them. Other surface nodes lie
+    /// outside the spheroid by O(h^2).
+    ///
+    /// Errors as [`HexMesh::spheroid_octant`], or [`MeshError::VolumeFit`]
+    /// when the exact volume cannot be reached (2 divisions with grading > 1).
+    pub fn spheroid_octant_exact_volume(spec: &OctantSpec) -> Result<HexMesh, MeshError> {
+        spec.validate()?;
+        Self::spheroid_octant_exact_volume_with_shape(
+            spec,
+            &OctantShape::for_aspect(spec.c / spec.a),
+        )
+    }
+
+    /// Like [`HexMesh::spheroid_octant_exact_volume`] with an explicit
+    /// layout (see [`HexMesh::spheroid_octant_with_shape`]).
+    pub fn spheroid_octant_exact_volume_with_shape(
+        spec: &OctantSpec,
+        shape: &OctantShape,
+    ) -> Result<HexMesh, MeshError> {
+        spec.validate()?;
+        shape.validate()?;
+        let layout =
+            cubed_octant::OctantLayout::new(spec.a, spec.c, spec.divisions, spec.grading, *shape);
+        exact_volume::fit(cubed_octant::build(layout), spec.a, spec.c)
     }
 
     /// Uniform mesh of the box [0, Lx] x [0, Ly] x [0, Lz] \[mm\] with

@@ -165,3 +165,36 @@ fn bad_explicit_shapes_are_rejected() {
     let b = HexMesh::spheroid_octant_with_shape(&spec(1.0, 1.3, 5, 2.0), &default).expect("valid");
     assert_eq!(a, b);
 }
+
+#[test]
+fn exact_volume_out_of_reach_is_reported() {
+    // With 2 divisions and grading 4 almost every surface node is a special
+    // point or held back next to one: the volume cannot be made exact.
+    let s = spec(1.0, 1.0, 2, 4.0);
+    let e = match HexMesh::spheroid_octant_exact_volume(&s) {
+        Err(e) => e,
+        Ok(m) => panic!("{s:?} accepted with volume {}", m.volume()),
+    };
+    let MeshError::VolumeFit {
+        volume,
+        target,
+        tolerance,
+    } = e
+    else {
+        panic!("unexpected error {e:?}");
+    };
+    assert!((target - std::f64::consts::PI / 6.0).abs() < 1e-15);
+    assert!(volume < target * (1.0 - tolerance), "{volume} vs {target}");
+    assert!(e.to_string().contains("target"), "{e}");
+    // Invalid parameters are rejected before any fitting.
+    assert_eq!(
+        HexMesh::spheroid_octant_exact_volume(&spec(1.0, 1.0, 1, 1.0)),
+        Err(MeshError::OctantDivisions(1))
+    );
+    assert_eq!(
+        HexMesh::spheroid_octant_exact_volume(&spec(1.0, -2.0, 4, 1.0)),
+        Err(MeshError::SemiAxisC(-2.0))
+    );
+    // Without grading 2 divisions still reach it.
+    assert!(HexMesh::spheroid_octant_exact_volume(&spec(1.0, 1.0, 2, 1.0)).is_ok());
+}

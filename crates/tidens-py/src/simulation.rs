@@ -256,7 +256,11 @@ impl PySimulation {
             .map_err(|e| solver_error(e, Phase::Setup))?;
         let cell = cell.get().inner.clone();
         let material = material.get().inner;
-        let options = MeshOptions { level, grading };
+        let options = MeshOptions {
+            level,
+            grading,
+            ..MeshOptions::default()
+        };
         let kind = element_kind(element)?;
         let (sim, element_particle) = py
             .detach(move || {

@@ -11,6 +11,7 @@ fn press(cell: &Cell, level: u32, until_density: f64, mode: ContactMode) -> (Sce
         &MeshOptions {
             level,
             grading: 1.0,
+            ..MeshOptions::default()
         },
     )
     .unwrap();
@@ -282,6 +283,7 @@ fn tying_the_particle_to_the_walls_slows_densification() {
             &MeshOptions {
                 level: 1,
                 grading: 1.0,
+                ..MeshOptions::default()
             },
         )
         .unwrap();

@@ -22,6 +22,7 @@ fn sc_simulation(
         &MeshOptions {
             level,
             grading: 1.0,
+            ..MeshOptions::default()
         },
     )
     .unwrap();

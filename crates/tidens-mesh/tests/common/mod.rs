@@ -19,6 +19,20 @@ pub fn octant(a: f64, c: f64, divisions: usize, grading: f64) -> HexMesh {
     .expect("valid spec")
 }
 
+/// Inner-cube divisions of mesh levels 1 to 6.
+pub const LEVEL_DIVISIONS: [usize; 6] = [4, 6, 8, 11, 16, 23];
+
+/// Like [`octant`], built with [`HexMesh::spheroid_octant_exact_volume`].
+pub fn exact_octant(a: f64, c: f64, divisions: usize, grading: f64) -> HexMesh {
+    HexMesh::spheroid_octant_exact_volume(&OctantSpec {
+        a,
+        c,
+        divisions,
+        grading,
+    })
+    .expect("valid spec")
+}
+
 fn sorted(mut q: [usize; 4]) -> [usize; 4] {
     q.sort_unstable();
     q
