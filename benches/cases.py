@@ -1,5 +1,5 @@
 """Whole-case measurements: the sc Ti-6Al-4V cell at 10 MPa (to rho = 0.9),
-every cell of the seed at 15 MPa (to 0.95), and the two elements.
+every cell of the paper at 15 MPa (to 0.95), and the two elements.
 
     python benches/cases.py levels [--levels 1 2 3 4] [--tolerance 0.01]
     python benches/cases.py tolerance [--level 2] [--tolerances 0.04 0.02 0.01 0.005] [--reference 0.001]

@@ -1,4 +1,4 @@
-"""Every cell of the seed, cells from files, and the contact options."""
+"""Every cell of the paper, cells from files, and the contact options."""
 
 import dataclasses
 import json
@@ -56,7 +56,7 @@ def test_presets_have_the_closed_form_density_and_mesh_it_within_2_percent(name:
     assert not np.any(f["contact_pressure"])  # nothing pressed yet
 
 
-def test_sc2_closed_form_at_the_seed_ratio() -> None:
+def test_sc2_closed_form_at_the_paper_ratio() -> None:
     assert td.cells.sc2().rho0 == pytest.approx(0.60002, abs=5e-6)
     # Large particles at the even corners, small (R / 1.566) at the odd ones.
     for corner, a, _ in td.cells.sc2().octants:

@@ -1,4 +1,4 @@
-"""The continuum model (DESIGN.md section 8) against properties it must have."""
+"""The continuum model (docs/model.md section 8) against properties it must have."""
 
 import math
 

@@ -108,6 +108,7 @@ class Simulation:
         until_time_s: float | None = None,
         mesh_level: int = 3,
         grading: float = 1.0,
+        exact_volume: bool = False,
         element: str = "hex8",
         tolerance: float = 0.01,
         max_strain_increment: float = 0.2,

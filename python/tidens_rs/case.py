@@ -36,6 +36,11 @@ class SolverSettings:
         error of t(0.8) and t(0.9) on the sc cell is about 0.3 %.
     grading
         Element-size ratio toward the contact points (1 = uniform).
+    exact_volume
+        Move the surface nodes of each particle outward (the contact points
+        stay on the true surface) so that its mesh has the exact volume of
+        the spheroid; by default the surface nodes lie on the spheroid and
+        the flat facets between them leave the mesh a little short of it.
     element
         ``hex8``: the 8-node mean-dilatation hexahedron (default); ``tet10``:
         the 10-node tetrahedron with one pressure, 6 per hexahedron of the
@@ -73,6 +78,7 @@ class SolverSettings:
     mesh_level: int = DEFAULT_MESH_LEVEL
     tolerance: float = DEFAULT_TOLERANCE
     grading: float = 1.0
+    exact_volume: bool = False
     element: str = "hex8"
     max_strain_increment: float = 0.2
     dt_initial_s: float | None = None
@@ -99,7 +105,7 @@ class Case:
     die-wall friction: the cell feels f sigma.
 
     ``contact`` is how touching particles interact: ``"frictionless"``
-    (they slide freely; the default, an assumption the seed leaves open) or
+    (they slide freely; the default, an assumption the paper leaves open) or
     ``"tied"`` (no sliding once closed; the contact then carries shear and
     tension). It matters only for cells of more than one particle (bcc, fcc,
     sc2, custom cells): sc has no particle-particle contact.
@@ -143,6 +149,7 @@ class Case:
             until_time_s=until_time_s,
             mesh_level=s.mesh_level,
             grading=s.grading,
+            exact_volume=s.exact_volume,
             element=s.element,
             tolerance=s.tolerance,
             max_strain_increment=s.max_strain_increment,

@@ -1,8 +1,8 @@
 """Cells: periodic packings reduced by their mirror symmetries to a box
-[0,Lx]x[0,Ly]x[0,Lz] holding particle octants at its corners (DESIGN.md
+[0,Lx]x[0,Ly]x[0,Lz] holding particle octants at its corners (docs/model.md
 section 2).
 
-The four packings of the seed are presets (:func:`sc`, :func:`bcc`,
+The four packings of the paper are presets (:func:`sc`, :func:`bcc`,
 :func:`fcc`, :func:`sc2`); any other arrangement of octants is a
 :func:`custom` cell, in code or from a cell file (:func:`from_file`).
 
@@ -93,7 +93,7 @@ def sc2(
 ) -> Cell:
     """Two-size simple cubic (rock salt): large particles of radius R =
     ``radius_mm`` and small ones of R/r, r = ``size_ratio`` in
-    [1, 1 + sqrt(2) = 2.414] (default the seed's 1.566), alternating over the
+    [1, 1 + sqrt(2) = 2.414] (default the paper's 1.566), alternating over the
     eight corners of a box of edge R + R/r; rho0 = (2 pi/3)(1 + r^3)/(1 + r)^3
     = 0.60002 at r = 1.566. Above 1 + sqrt(2) the large particles would overlap
     across the face diagonals, so such a ratio is a ValueError."""

@@ -54,6 +54,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--mesh-level", type=int, default=DEFAULT_MESH_LEVEL, help=f"mesh level, 1 (coarsest) to 6; each level refines the elements by about sqrt(2) (default {DEFAULT_MESH_LEVEL})")
     g.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE, help=f"time-integration accuracy, relative error of t(rho) (default {DEFAULT_TOLERANCE:g})")
     g.add_argument("--grading", type=float, default=1.0, help="element-size ratio toward the contact points (default 1)")
+    g.add_argument("--exact-volume", action="store_true", help="move each particle's surface nodes outward (contact points kept on the surface) so that its mesh has the exact spheroid volume")
     g.add_argument("--element", choices=("hex8", "tet10"), default="hex8", help="hex8: mean-dilatation hexahedra (default); tet10: quadratic tetrahedra with one pressure, cut from the same blocks (single-particle cells only)")
     g.add_argument("--max-steps", type=int, default=100_000, help="step limit (default 100000)")
     g = p.add_argument_group("output")
@@ -138,6 +139,7 @@ def _run(args: argparse.Namespace) -> int:
             mesh_level=args.mesh_level,
             tolerance=args.tolerance,
             grading=args.grading,
+            exact_volume=args.exact_volume,
             element=args.element,
             max_steps=args.max_steps,
         ),

@@ -1,6 +1,6 @@
-"""The closed-form continuum model of die pressing (DESIGN.md section 8).
+"""The closed-form continuum model of die pressing (docs/model.md section 8).
 
-Densification rates of the seed's Eqs. 2 and 3 (Norton creep ``C q^n``, stress
+Densification rates of Eqs. 2 and 3 of the paper (Norton creep ``C q^n``, stress
 acting on the powder ``s = f sigma`` [MPa], rates in 1/s):
 
 * initial stage (rho < 0.9)::
@@ -76,7 +76,7 @@ class ContinuumModel:
         return self.knockdown * self.stress_mpa
 
     def rate(self, rho: npt.ArrayLike) -> FloatArray:
-        """Densification rate at full load [1/s], seed Eqs. 2 (rho < 0.9) and 3."""
+        """Densification rate at full load [1/s], Eqs. 2 (rho < 0.9) and 3 of the paper."""
         r = np.asarray(rho, dtype=float)
         c, n, s, r0 = self.creep_c, self.creep_n, self.cell_stress_mpa, self.rho0
         out = np.empty_like(r)

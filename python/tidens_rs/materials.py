@@ -1,4 +1,4 @@
-"""Material presets of the seed (DESIGN.md section 1) and custom materials.
+"""Material presets of the paper (docs/model.md section 1) and custom materials.
 
 Every preset has the default elastic constants E = 43.5 GPa and nu = 0.3,
 which make the problem well posed and barely change densification. Creep:
@@ -6,7 +6,7 @@ which make the problem well posed and barely change densification. Creep:
 
 The transformation-mismatch-plasticity preset (thermal cycling of Ti-6Al-4V,
 n = 1) is linear in stress only while stresses stay near the internal stress
-(7.4 MPa); the contact stresses of a powder exceed it, a limitation the seed
+(7.4 MPa); the contact stresses of a powder exceed it, a limitation the paper
 shares. :func:`tmp_creep_coefficient` gives C for another cycle.
 """
 

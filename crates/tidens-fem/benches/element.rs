@@ -65,7 +65,10 @@ fn evaluation(c: &mut Criterion) {
         g.throughput(Throughput::Elements(body.element_count() as u64));
         for tangent in [false, true] {
             g.bench_function(
-                format!("{name}, {} elements, tangent={tangent}", body.element_count()),
+                format!(
+                    "{name}, {} elements, tangent={tangent}",
+                    body.element_count()
+                ),
                 |b| b.iter(|| black_box(body.evaluate(black_box(&u), 10.0, tangent))),
             );
         }

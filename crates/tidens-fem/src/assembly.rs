@@ -136,7 +136,9 @@ impl ElementAssembler {
         out.par_iter_mut().enumerate().for_each(|(c, v)| {
             *v = self.touch[self.touch_ptr[c]..self.touch_ptr[c + 1]]
                 .iter()
-                .fold(0.0, |s, &(e, q)| s + vectors[e as usize * ndof + q as usize]);
+                .fold(0.0, |s, &(e, q)| {
+                    s + vectors[e as usize * ndof + q as usize]
+                });
         });
     }
 

@@ -305,8 +305,7 @@ impl Body {
                     let (n, p) = (el[a], self.nodes[el[a]]);
                     [p[0] + u[3 * n], p[1] + u[3 * n + 1], p[2] + u[3 * n + 2]]
                 });
-                let states_n: [PointState; NGP] =
-                    std::array::from_fn(|k| self.states[NGP * e + k]);
+                let states_n: [PointState; NGP] = std::array::from_fn(|k| self.states[NGP * e + k]);
                 let residual: &mut [f64; NDOF] = residual
                     .try_into()
                     .map_err(|_| FemError::Mesh("element force buffer size".into()))?;

@@ -27,8 +27,9 @@ pub use assembly::ElementAssembler;
 pub use body::{Body, BodyEvaluation, ElementFields, ElementKind};
 pub use error::FemError;
 pub use mean_dilatation::{
-    ElementGeometry, ElementOutput, ElementSummary, Hex8Geometry, Hex8Output, MeanDilatationGeometry,
-    MeanDilatationOutput, Tet10Degree3Geometry, Tet10Degree3Output, Tet10Geometry, Tet10Output,
+    ElementGeometry, ElementOutput, ElementSummary, Hex8Geometry, Hex8Output,
+    MeanDilatationGeometry, MeanDilatationOutput, Tet10Degree3Geometry, Tet10Degree3Output,
+    Tet10Geometry, Tet10Output,
 };
 pub use reference::{Hex8, ReferenceElement, Tet10, Tet10Degree3};
 pub use sparse::{DOF_DROPPED, SparseSystem};

@@ -208,3 +208,48 @@ fn patch_test_homogeneous_finite_deformation_is_exact() {
         body.commit(&ev);
     }
 }
+
+/// The parallel gather of element tangents and forces equals the serial
+/// scatter in element order, bit for bit, with one thread and with two.
+#[test]
+fn parallel_gather_equals_the_serial_scatter_bit_for_bit() {
+    let (nodes, elements, _) = distorted_block(5, 0.2);
+    let mat = Material::new(4.35e4, 0.3, 4.8e-7, 2.8).unwrap();
+    let body = Body::new(nodes.clone(), elements.clone(), mat).unwrap();
+    let u = affine_displacement(&nodes, &stretch_rotation());
+    let ev = body.evaluate(&u, 10.0, true).unwrap();
+    let identity: Vec<usize> = (0..body.dof_count()).collect();
+    let cliques: Vec<Vec<usize>> = (0..elements.len()).map(|e| body.element_dofs(e)).collect();
+    let mut serial =
+        SparseSystem::from_cliques(body.dof_count(), cliques.iter().map(|c| c.as_slice()));
+    for e in 0..elements.len() {
+        serial.add_block(&body.element_dofs(e), ev.element_tangent(e), &identity);
+    }
+    let force = ev.internal_force(&body);
+    let dofs: Vec<usize> = cliques.iter().flatten().copied().collect();
+    let plan = tidens_fem::ElementAssembler::new(body.dof_count(), 24, &dofs);
+    assert_eq!(plan.col_ptr(), serial.col_ptr());
+    assert_eq!(plan.row_idx(), serial.row_idx());
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let (values, gathered) = pool.install(|| {
+            let mut values = vec![0.0; plan.nnz()];
+            plan.assemble_matrix(ev.tangents(), &mut values);
+            let mut f = vec![0.0; plan.dim()];
+            plan.assemble_vector(ev.residuals(), &mut f);
+            (values, f)
+        });
+        let same = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits());
+        assert!(
+            same(&values, serial.values()),
+            "{threads} thread(s): matrix differs"
+        );
+        assert!(
+            same(&gathered, &force),
+            "{threads} thread(s): force differs"
+        );
+    }
+}

@@ -108,7 +108,7 @@ impl PyCell {
     /// radius R = radius_mm [mm] and small ones of R/r, r = size_ratio in
     /// [1, 1 + sqrt 2] (beyond it the large particles overlap), alternating over the eight corners of a box of edge R + R/r
     /// (z scaled by aspect_ratio); rho0 = (2 pi/3)(1 + r^3)/(1 + r)^3
-    /// (0.60002 at the seed's r = 1.566).
+    /// (0.60002 at the paper's r = 1.566).
     #[staticmethod]
     #[pyo3(signature = (radius_mm = 0.05, size_ratio = 1.566, aspect_ratio = 1.0))]
     fn sc2(radius_mm: f64, size_ratio: f64, aspect_ratio: f64) -> PyResult<Self> {

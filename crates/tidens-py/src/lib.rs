@@ -35,7 +35,7 @@ mod _core {
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-        // The material preset names, in the order of DESIGN.md's table.
+        // The material preset names, in the order of the presets table (docs/model.md).
         m.add("PRESET_NAMES", Preset::ALL.map(Preset::name).to_vec())?;
         // The `contact` choices of Simulation, the default first.
         let modes: Vec<&str> = super::simulation::CONTACT_MODES

@@ -109,7 +109,9 @@ impl Progress {
 /// knockdown * stress (die-wall friction, knockdown in (0, 1]). Stop: at
 /// relative density until_density and/or time until_time_s [s] (at least one).
 /// Mesh: mesh_level (1 coarsest; each level refines by ~sqrt(2)) and grading
-/// (element-size ratio toward the contacts, in [1, 10]). Contact between
+/// (element-size ratio toward the contacts, in [1, 10]) and exact_volume
+/// (surface nodes moved outward so that each particle's mesh has its exact
+/// volume, contact points kept on the surface). Contact between
 /// particles: contact = "frictionless" (sliding, the default) or "tied" (no
 /// sliding once closed); tied_planes = True ties surface nodes that touch a
 /// rigid die plane (a sensitivity option, not the default: the mirror planes
@@ -172,6 +174,7 @@ impl PySimulation {
         until_time_s = None,
         mesh_level = 3,
         grading = 1.0,
+        exact_volume = false,
         element = "hex8",
         tolerance = 0.01,
         max_strain_increment = 0.2,
@@ -199,6 +202,7 @@ impl PySimulation {
         until_time_s: Option<f64>,
         mesh_level: i64,
         grading: f64,
+        exact_volume: bool,
         element: &str,
         tolerance: f64,
         max_strain_increment: f64,
@@ -259,7 +263,7 @@ impl PySimulation {
         let options = MeshOptions {
             level,
             grading,
-            ..MeshOptions::default()
+            exact_volume,
         };
         let kind = element_kind(element)?;
         let (sim, element_particle) = py

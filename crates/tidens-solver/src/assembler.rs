@@ -209,7 +209,9 @@ impl Assembler {
             }
             let m = t.dofs.len();
             for (p, &dp) in t.dofs.iter().enumerate() {
-                out[dp] += (0..m).map(|q| t.tangent[p * m + q] * v[t.dofs[q]]).sum::<f64>();
+                out[dp] += (0..m)
+                    .map(|q| t.tangent[p * m + q] * v[t.dofs[q]])
+                    .sum::<f64>();
             }
         }
         out

@@ -1,6 +1,6 @@
 //! Cells as data: a box [0,Lx]x[0,Ly]x[0,Lz] whose faces are mirror planes,
-//! holding octants of spheroids centred at its corners (DESIGN.md section 2),
-//! and the seed's packings built from them.
+//! holding octants of spheroids centred at its corners (docs/model.md section 2),
+//! and the paper's packings built from them.
 
 use crate::error::SolverError;
 use serde::{Deserialize, Serialize};
@@ -59,7 +59,7 @@ pub const FIT_TOLERANCE: f64 = 1e-6;
 /// Allowed range of the sc-2 radius ratio R_large / R_small: above 1 + sqrt 2
 /// the large particles would overlap across the face diagonals.
 pub const SIZE_RATIO_RANGE: (f64, f64) = (1.0, 1.0 + std::f64::consts::SQRT_2);
-/// The seed's sc-2 radius ratio.
+/// The paper's sc-2 radius ratio.
 pub const DEFAULT_SIZE_RATIO: f64 = 1.566;
 
 fn check(

@@ -1,4 +1,5 @@
-//! Frictionless rigid planes, handled analytically (DESIGN.md sections 2, 5).
+//! Frictionless rigid planes, handled analytically (docs/model.md sections
+//! 2 and 5).
 //!
 //! Every box face is a rigid mirror plane normal to a coordinate axis, so a
 //! node touches it through one dof only: the dof along that axis. A dof on a

@@ -37,7 +37,12 @@ impl Simulation {
     /// Elements and particle contact at displacement `u` after a step `dt`
     /// [s], with tangents if asked. The time taken is booked into the run's
     /// totals.
-    pub(crate) fn evaluate(&mut self, u: &[f64], dt: f64, tangent: bool) -> Result<Evaluation, String> {
+    pub(crate) fn evaluate(
+        &mut self,
+        u: &[f64],
+        dt: f64,
+        tangent: bool,
+    ) -> Result<Evaluation, String> {
         let t0 = Instant::now();
         let body = self
             .body

@@ -7,8 +7,7 @@
 //! the consistent tangent of a large viscoplastic step may be), the same
 //! symbolic structure serves a Bunch-Kaufman LBL^T factorisation, which handles
 //! indefinite symmetric matrices. Sequential kernels keep the result identical
-//! for any thread count (DESIGN.md measured no gain from two threads at these
-//! sizes).
+//! for any thread count.
 
 use crate::error::SolverError;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};

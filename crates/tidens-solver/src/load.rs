@@ -4,7 +4,7 @@ use serde::{Deserialize, Serialize};
 
 /// Stage 1 ramps the applied stress linearly from 0 to `stress` over
 /// `ramp_time`; stage 2 holds it. The die-wall knock-down `knockdown` (f)
-/// multiplies the stress acting on the cell (DESIGN.md section 1).
+/// multiplies the stress acting on the cell (docs/model.md section 1).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LoadHistory {
     /// Applied (nominal) stress in the hold [MPa].
@@ -37,7 +37,7 @@ impl LoadHistory {
 
     /// Effective time at full load for a Norton exponent `n`:
     /// `t_eff = integral of (sigma(t)/sigma)^n dt`, which is `t^(n+1) / ((n+1)
-    /// t_r^n)` during the ramp and `t - n t_r / (n + 1)` after it (DESIGN.md
+    /// t_r^n)` during the ramp and `t - n t_r / (n + 1)` after it (docs/model.md
     /// section 7, item 2). For a rigid-viscoplastic body the densification
     /// state depends on time only through `t_eff`.
     pub fn effective_time(&self, t: f64, n: f64) -> f64 {

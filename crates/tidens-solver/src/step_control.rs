@@ -102,7 +102,13 @@ impl StepController {
     /// `rate` [1/s], at load factor to the n `weight`, with largest plastic
     /// strain increment `max_dp`: the assessment to accept it with, or the
     /// shorter step to retry it with.
-    pub fn assess(&self, dt: f64, rate: f64, weight: f64, max_dp: f64) -> Result<StepAssessment, f64> {
+    pub fn assess(
+        &self,
+        dt: f64,
+        rate: f64,
+        weight: f64,
+        max_dp: f64,
+    ) -> Result<StepAssessment, f64> {
         let moved = (rate * dt).abs() > MOVED_STRAIN;
         let dln = match self.last_rate {
             Some(r0) if moved && r0 > 0.0 && rate > 0.0 => (r0 / rate).ln() * weight,

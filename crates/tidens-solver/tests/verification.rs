@@ -1,4 +1,4 @@
-//! Verification ladder (DESIGN.md section 7), items 2 and 3, and the sc cell
+//! Verification ladder (docs/model.md section 7), items 2 and 3, and the sc cell
 //! end to end on a coarse mesh.
 
 use tidens_solver::{
@@ -254,7 +254,7 @@ fn time_error_estimate_matches_the_true_error_of_backward_euler() {
     assert!(errors[1] < 0.5 * errors[0], "errors {errors:?}");
 }
 
-/// Stiff and extreme cases (DESIGN.md section 9) on the coarsest sc mesh:
+/// Stiff and extreme cases (docs/model.md) on the coarsest sc mesh:
 /// each reaches rho = 0.9 with a monotone density and no node inside a
 /// rigid plane at any converged step.
 #[test]
