@@ -1,4 +1,4 @@
-//! Contact between particle surfaces (DESIGN.md section 5), units mm, N, MPa.
+//! Contact between particle surfaces, units mm, N, MPa.
 //!
 //! [`ParticleContact`] (the entry type) holds the surfaces of the particles
 //! of a scene and enforces frictionless (or tied) contact between them:
@@ -13,9 +13,11 @@
 //!   node of tributary area `A` is `A / (4 eps) <lambda + eps p>^2` (half of
 //!   `A / (2 eps) <.>^2` per pass) with `p` its penetration into the facet,
 //!   `lambda` its contact pressure multiplier and `<x> = max(x, 0)`. Its
-//!   gradient is the contact force, its Hessian the consistent tangent
-//!   (symmetric), both exact: the penetration is written once, generic over
-//!   dual numbers, and differentiated by `num-dual`. Between Newton solves,
+//!   gradient is the contact force `A/2 <lambda + eps p> dp/du`, its Hessian
+//!   (where the pressure is positive) the consistent tangent
+//!   `A/2 (eps dp/du (x) dp/du + (lambda + eps p) d2p/du2)`, symmetric, both
+//!   exact: the derivatives of the penetration are written in closed form in
+//!   [`mod@penetration`]. Between Newton solves,
 //!   [`ParticleContact::augment`] updates the multipliers (Uzawa) until the
 //!   penetration is below its tolerance.
 //! - within a step each node keeps the facet it was paired with at the
@@ -23,15 +25,17 @@
 //!   while Newton iterates.
 
 mod error;
-mod gap;
+pub mod gap;
+pub mod penetration;
 mod surface;
 
 pub use error::ContactError;
-pub use gap::{penetration, project, shape, tie_gap};
+pub use gap::{project, project_from, shape, tie_gap};
+pub use penetration::{
+    Penetration, PenetrationHessian, penetration, penetration_gradient, penetration_hessian,
+};
 pub use surface::ContactSurface;
 
-use nalgebra::{SMatrix, SVector};
-use num_dual::{Dual2SVec64, DualSVec64, hessian};
 use parry3d_f64::math::Vector as PVector;
 use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::TriMesh;
@@ -55,10 +59,10 @@ pub enum ContactMode {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ContactSettings {
     pub mode: ContactMode,
-    /// Penalty stiffness eps [MPa/mm].
+    /// Penalty stiffness eps \[MPa/mm\].
     pub penalty: f64,
     /// Search distance: nodes farther than this from the other surface are
-    /// not candidates [mm].
+    /// not candidates \[mm\].
     pub search_distance: f64,
 }
 
@@ -67,13 +71,13 @@ pub struct ContactSettings {
 pub struct ContactTerm {
     /// Body dofs: the slave node's three, then the facet nodes' twelve.
     pub dofs: [usize; TERM_DOFS],
-    /// Contribution to the internal force [N].
+    /// Contribution to the internal force \[N\].
     pub force: [f64; TERM_DOFS],
-    /// Consistent tangent, row-major 15x15 [N/mm] (empty if not requested).
+    /// Consistent tangent, row-major 15x15 \[N/mm\] (empty if not requested).
     pub tangent: Vec<f64>,
-    /// Contact pressure (tied: traction magnitude) at the slave node [MPa].
+    /// Contact pressure (tied: traction magnitude) at the slave node \[MPa\].
     pub pressure: f64,
-    /// Penetration of the slave node (negative: a gap; tied: gap length) [mm].
+    /// Penetration of the slave node (negative: a gap; tied: gap length) \[mm\].
     pub penetration: f64,
     /// Slave surface and index of the node in it.
     pub slave: (usize, usize),
@@ -89,10 +93,10 @@ pub type StateSnapshot = Vec<Vec<(f64, Option<(usize, usize, [f64; 2])>, [f64; 3
 /// Multiplier state of one slave node of one pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 struct NodeState {
-    /// Normal pressure multiplier [MPa] (frictionless).
+    /// Normal pressure multiplier \[MPa\] (frictionless).
     lambda: f64,
     /// Tied: the master surface, facet and parameters, and the vector
-    /// multiplier [MPa].
+    /// multiplier \[MPa\].
     tie: Option<(usize, usize, [f64; 2])>,
     tie_lambda: [f64; 3],
 }
@@ -117,13 +121,13 @@ pub struct ContactEvaluation {
 }
 
 impl ContactEvaluation {
-    /// Largest penetration of any slave node into a master surface [mm]
+    /// Largest penetration of any slave node into a master surface \[mm\]
     /// (frictionless terms; tied terms report their gap length).
     pub fn max_penetration(&self) -> f64 {
         self.terms.iter().map(|t| t.penetration).fold(0.0, f64::max)
     }
 
-    /// Largest violation of the contact conditions [mm]: a penetration, or
+    /// Largest violation of the contact conditions \[mm\]: a penetration, or
     /// a gap at a node that still carries pressure (a multiplier left from
     /// an earlier state). The augmented Lagrangian iterates until it is small.
     pub fn max_violation(&self) -> f64 {
@@ -138,18 +142,6 @@ impl ContactEvaluation {
             })
             .fold(0.0, f64::max)
     }
-}
-
-/// The 15 coordinates of a slave point and a facet, in term order.
-fn pack(p: &[f64; 3], q: &[[f64; 3]; 4]) -> SVector<f64, TERM_DOFS> {
-    let mut v = SVector::<f64, TERM_DOFS>::zeros();
-    for i in 0..3 {
-        v[i] = p[i];
-        for a in 0..4 {
-            v[3 + 3 * a + i] = q[a][i];
-        }
-    }
-    v
 }
 
 fn point(x: &[f64], node: usize) -> [f64; 3] {
@@ -216,7 +208,11 @@ impl ParticleContact {
     }
 
     /// The search meshes of the master surfaces of `pairs` whose slave
-    /// surface satisfies `needs`.
+    /// surface satisfies `needs`. Built afresh at every call: pairing runs
+    /// twice a step, and a surface's mesh costs about one contact
+    /// evaluation to build, a small share of a step next to the element
+    /// work (see the detection benchmarks); keeping meshes between calls
+    /// would not pay for the state it adds.
     fn search_meshes(
         &self,
         x: &[f64],
@@ -304,7 +300,7 @@ impl ParticleContact {
             let q = self.surfaces[m].quads[facet].map(|n| point(x, n));
             let xi = project(&p, &q);
             let inside = xi[0].abs().max(xi[1].abs()) <= 1.1;
-            let near = penetration(&pack(&p, &q), xi) > -self.settings.search_distance;
+            let near = penetration(&p, &q, xi) > -self.settings.search_distance;
             inside && near
         };
         let pairing: Vec<Vec<Option<(usize, usize)>>> = (0..self.surfaces.len())
@@ -426,29 +422,19 @@ impl ParticleContact {
     ) -> Option<ContactTerm> {
         let (p, q, dofs) = self.gather(x, s, k, m, facet);
         let xi = project(&p, &q);
-        let mut v = SVector::<f64, TERM_DOFS>::zeros();
-        for (j, d) in dofs.iter().enumerate() {
-            v[j] = x[*d];
-        }
         // Nodes clearly apart from the facet need no derivatives.
         let band = -0.1 * self.settings.search_distance;
-        if self.state[s][k].lambda <= 0.0 && penetration(&v, xi) <= band {
+        if self.state[s][k].lambda <= 0.0 && penetration(&p, &q, xi) <= band {
             return None;
         }
         let area = 0.5 * self.surfaces[s].areas[k];
         let eps = self.settings.penalty;
         let (pen, grad, hess) = if with_tangent {
-            let (f, g, h) = hessian(
-                |w: SVector<Dual2SVec64<TERM_DOFS>, TERM_DOFS>| penetration(&w, xi),
-                &v,
-            );
-            (f, g, Some(h))
+            let d = penetration_hessian(&p, &q, xi);
+            (d.value, d.gradient, Some(d.hessian))
         } else {
-            let (f, g) = num_dual::gradient(
-                |w: SVector<DualSVec64<TERM_DOFS>, TERM_DOFS>| penetration(&w, xi),
-                &v,
-            );
-            (f, g, None)
+            let d = penetration_gradient(&p, &q, xi);
+            (d.value, d.gradient, None)
         };
         let pressure = (self.state[s][k].lambda + eps * pen).max(0.0);
         // A node near the surface without pressure (a gap below a tenth of
@@ -468,9 +454,12 @@ impl ParticleContact {
         let tangent = match hess {
             Some(h) => {
                 let stiffness = if pressure > 0.0 { eps } else { 1e-3 * eps };
-                let k: SMatrix<f64, TERM_DOFS, TERM_DOFS> =
-                    (grad * grad.transpose()) * (area * stiffness) + h * (area * pressure);
-                k.transpose().as_slice().to_vec()
+                let (kg, kh) = (area * stiffness, area * pressure);
+                let mut k = Vec::with_capacity(TERM_DOFS * TERM_DOFS);
+                for (gi, hi) in grad.iter().zip(&h) {
+                    k.extend(grad.iter().zip(hi).map(|(gj, hij)| gi * gj * kg + hij * kh));
+                }
+                k
             }
             None => Vec::new(),
         };
@@ -544,7 +533,7 @@ impl ParticleContact {
     /// Uzawa update after a converged solve: the multipliers take the
     /// pressures of `eval` (slave nodes not in it lose theirs); tied nodes
     /// add their gap times the penalty. Returns the largest penetration
-    /// before the update [mm].
+    /// before the update \[mm\].
     pub fn augment(&mut self, x: &[f64], eval: &ContactEvaluation) -> f64 {
         let eps = self.settings.penalty;
         let mut active: Vec<Vec<bool>> = self

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 pub struct ContactSurface {
     /// Global node ids of the surface nodes.
     pub nodes: Vec<usize>,
-    /// Tributary area of each surface node in the reference state [mm^2].
+    /// Tributary area of each surface node in the reference state \[mm^2\].
     pub areas: Vec<f64>,
     /// Quad facets by global node id (counter-clockwise about the outward
     /// normal).
@@ -82,7 +82,7 @@ impl ContactSurface {
         &self.ring[q]
     }
 
-    /// Axis-aligned bounding box in the configuration `x` [mm].
+    /// Axis-aligned bounding box in the configuration `x` \[mm\].
     pub fn bounding_box(&self, x: &[f64]) -> ([f64; 3], [f64; 3]) {
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
