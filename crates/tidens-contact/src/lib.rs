@@ -42,6 +42,10 @@ use parry3d_f64::shape::TriMesh;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+/// Fraction of the penalty stiffness that a slave node near a facet without
+/// pressure brings to the tangent while its pair of surfaces presses nowhere.
+const TOUCH_STIFFNESS: f64 = 1e-3;
+
 /// Dofs of one contact term: a slave node and the four nodes of a facet.
 pub const TERM_DOFS: usize = 15;
 
@@ -384,7 +388,25 @@ impl ParticleContact {
                 let (m, facet) = self.pairing.get(s)?.get(k).copied().flatten()?;
                 self.node_term(x, s, k, m, facet, with_tangent)
             })
+            .collect::<Vec<_>>();
+        let mut terms = terms;
+        // The touch stiffness of unpressed nodes keeps a body that hangs on
+        // a contact about to close (the piston's particles on the others at
+        // the start) from being free in a Newton iteration. Once a pair of
+        // surfaces presses anywhere it is held, and the stiffness (which the
+        // force does not have) would only slow Newton down near the edge of
+        // the contact patch: it is dropped there.
+        let pressed: std::collections::BTreeSet<(usize, usize)> = terms
+            .iter()
+            .filter(|t| t.pressure > 0.0)
+            .map(|t| (t.slave.0, t.master.0))
             .collect();
+        for t in &mut terms {
+            let tied = self.state[t.slave.0][t.slave.1].tie.is_some();
+            if t.pressure <= 0.0 && !tied && pressed.contains(&(t.slave.0, t.master.0)) {
+                t.tangent.fill(0.0);
+            }
+        }
         ContactEvaluation { terms }
     }
 
@@ -438,11 +460,9 @@ impl ParticleContact {
         };
         let pressure = (self.state[s][k].lambda + eps * pen).max(0.0);
         // A node near the surface without pressure (a gap below a tenth of
-        // the search distance) still brings a thousandth of the penalty
-        // stiffness to the tangent (not to the force), so that a body held
-        // only by contacts about to close (a particle resting on another at a
-        // point) is never free in a Newton iteration, while Newton's tangent
-        // stays nearly consistent.
+        // the search distance) brings [`TOUCH_STIFFNESS`] of the penalty to
+        // the tangent (not to the force) while its pair of surfaces has no
+        // pressed node yet (see `evaluate`).
         let touching = pen > band;
         if pressure <= 0.0 && !touching {
             return None;
@@ -453,7 +473,11 @@ impl ParticleContact {
         }
         let tangent = match hess {
             Some(h) => {
-                let stiffness = if pressure > 0.0 { eps } else { 1e-3 * eps };
+                let stiffness = if pressure > 0.0 {
+                    eps
+                } else {
+                    TOUCH_STIFFNESS * eps
+                };
                 let (kg, kh) = (area * stiffness, area * pressure);
                 let mut k = Vec::with_capacity(TERM_DOFS * TERM_DOFS);
                 for (gi, hi) in grad.iter().zip(&h) {

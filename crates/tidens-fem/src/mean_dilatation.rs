@@ -428,7 +428,7 @@ pub fn evaluate_into<const NEN: usize, const NGP: usize, const NXP: usize, const
     for (r, d) in residual.iter_mut().zip(dv.iter()) {
         *r += u1 * d;
     }
-    if let Some(tangent) = tangent.as_deref_mut() {
+    if let Some(tangent) = tangent {
         for gp in 0..NGP {
             let c = u1 * geom.volume_weight[gp] * jdet[gp];
             add_volume_curvature::<NEN, NDOF>(tangent, c, &gx[gp]);

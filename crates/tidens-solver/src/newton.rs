@@ -386,3 +386,83 @@ impl Simulation {
         touching
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::{Cell, LoadHistory, MeshOptions, Preset, Scene, Settings, Simulation};
+    use tidens_fem::DOF_DROPPED;
+
+    /// The assembled system is the derivative of the residual: for the bcc
+    /// cell during the ramp (particle contact pressed, plastic flow near the
+    /// contact), `K v` equals central differences of the residual along `v`
+    /// over the free equations and the piston.
+    #[test]
+    fn assembled_tangent_equals_finite_differences_of_the_residual() {
+        let cell = Cell::bcc(0.05, 1.0).unwrap();
+        let scene = Scene::from_cell(
+            &cell,
+            &MeshOptions {
+                level: 1,
+                ..MeshOptions::default()
+            },
+        )
+        .unwrap();
+        let mut settings = Settings::new(LoadHistory {
+            stress: 15.0,
+            knockdown: 1.0,
+            ramp_time: 1.0,
+        });
+        settings.until_time = Some(0.2);
+        let mut sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
+        sim.run(|_| true).unwrap();
+        let dt = 0.05;
+        let force = sim.full_force * sim.settings.load.factor(sim.state.time + dt);
+        let (u0, piston0) = (sim.state.u.clone(), sim.state.piston);
+        let x = sim.current_coordinates(&u0);
+        sim.contact.as_mut().unwrap().pair(&x);
+        let map = sim.constraints.equation_map();
+        let eval = sim.evaluate(&u0, dt, true).unwrap();
+        assert!(eval.contact.terms.iter().any(|t| t.pressure > 0.0));
+        assert!(sim.assembler.assemble(&eval, &map));
+        let k = sim.assembler.system().clone();
+        let n = sim.constraints.dof_count();
+        // A smooth direction over the free equations and the piston.
+        let v: Vec<f64> = (0..=n)
+            .map(|e| {
+                if e == n || map.get(e) == Some(&e) {
+                    1e-4 * (0.37 * e as f64).sin()
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let kv = k.mul_vec(&v);
+        let mut residual_at = |s: f64| {
+            let mut u = u0.clone();
+            for d in 0..n {
+                if map[d] == d {
+                    u[d] += s * v[d];
+                }
+            }
+            let piston = piston0 + s * v[n];
+            sim.constraints.enforce(&mut u, piston);
+            let ev = sim.evaluate(&u, dt, false).unwrap();
+            sim.residual(&ev.f_int, &map, force)
+        };
+        let h = 1e-4;
+        let (rp, rm) = (residual_at(h), residual_at(-h));
+        let scale = kv.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let mut worst = 0.0f64;
+        for e in 0..=n {
+            if e < n && map[e] == DOF_DROPPED {
+                continue;
+            }
+            let fd = (rp[e] - rm[e]) / (2.0 * h);
+            worst = worst.max((fd - kv[e]).abs());
+        }
+        assert!(
+            worst < 1e-5 * scale,
+            "K v off the differences by {worst:e} (scale {scale:e})"
+        );
+    }
+}
