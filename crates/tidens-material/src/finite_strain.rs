@@ -28,10 +28,11 @@
 //! `ln(b)/2`, which is evaluated without cancellation; repeated eigenvalues need
 //! no special case.
 
+use crate::eigen3::symmetric_eigen;
 use crate::error::MaterialError;
 use crate::params::Material;
 use crate::state::PointState;
-use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 /// Spatial tangent `a` as a 9x9 matrix, row `3 i + j` for `g_ij`, column
 /// `3 k + l` for `l_kl`: the linearised virtual work is `g : a : l` per unit
@@ -150,7 +151,7 @@ impl Material {
         }
         let g_mod = self.shear_modulus();
         let b_trial = f * sym_from6(&state.cp_inv) * f.transpose();
-        let eig = SymmetricEigen::new(b_trial);
+        let eig = symmetric_eigen(&b_trial);
         let q_mat = eig.eigenvectors;
         let b = eig.eigenvalues;
         if b.iter().any(|&x| !(x > 0.0)) {
