@@ -2,8 +2,8 @@
 //!
 //! One law, in two layers:
 //! - [`Material`]: Hencky (logarithmic) isotropic elasticity with von Mises (J2)
-//!   Norton viscoplasticity, `eps_dot = C q^n`, zero yield stress, isochoric flow
-//!   (DESIGN.md section 3). Its scalar backward-Euler return is
+//!   Norton viscoplasticity, `eps_dot = C q^n`, zero yield stress, isochoric
+//!   flow. Its scalar backward-Euler return is
 //!   [`Material::return_map`].
 //! - [`Material::update_deviatoric`]: the finite-strain material point, the
 //!   multiplicative split `F = Fe Fp` integrated with the exponential map. It
