@@ -52,7 +52,7 @@ pub struct SymmetricEigen3 {
 
 /// Cap on the Newton iterations for the extreme eigenvalue. From the upper
 /// bound `2 sqrt(J2/3)` the worst case (`J3 = 0`, root `sqrt(J2)`) reaches full
-/// precision in six iterations; the cap only guards against NaN input.
+/// precision in five iterations; the cap only guards against NaN input.
 const MAX_NEWTON: usize = 16;
 
 /// Eigen-decomposition of the symmetric matrix `a` (its two off-diagonal
@@ -174,9 +174,11 @@ fn extreme_eigenvalue(s: &Matrix3<f64>) -> f64 {
         let dp = 3.0 * x * x - j2;
         let step = p / dp;
         x -= step;
-        // Monotone from above: a step that is no longer positive (or below
-        // round-off) means the root is reached.
-        if !(step > 4.0 * f64::EPSILON * x) {
+        // Beyond the root (x >= sqrt(J2) >= (3/4)^(1/2) x0) p''/p' <= 4/x, so
+        // the error left after a step s is below 2 s^2 / x: a step under
+        // 5e-9 x leaves a fraction of an ulp, and a step that is no longer
+        // positive means round-off has been reached.
+        if !(step > 5e-9 * x) {
             break;
         }
     }
