@@ -400,6 +400,62 @@ mod tests {
     }
 
     #[test]
+    fn end_state_carries_the_returned_stress() {
+        // Hencky elasticity at the end of the step: with b_new = F Cp^-1 F^T
+        // from the returned state, tau_dev = G dev(ln b_new), and the elastic
+        // volume is the trial one (det b_new = det b_trial).
+        let m = mat(2.8);
+        let g = m.shear_modulus();
+        let prestrained = PointState {
+            cp_inv: sym_to6(&{
+                let fp: Matrix3<f64> = Matrix3::new(1.1, 0.05, 0.0, 0.0, 0.95, 0.02, 0.0, 0.0, 1.0);
+                let fp = fp / fp.determinant().cbrt();
+                let fpi = fp.try_inverse().unwrap();
+                fpi * fpi.transpose()
+            }),
+            eqps: 0.1,
+        };
+        for &scale in &[1e-3, 0.05, 1.0] {
+            for state in [PointState::default(), prestrained] {
+                let f = some_f(scale);
+                for &dt in &[1e-2, 10.0, 1e4] {
+                    let r = m.update_deviatoric(&f, &state, dt, false).unwrap();
+                    let b_trial = f * sym_from6(&state.cp_inv) * f.transpose();
+                    let b_new = f * sym_from6(&r.state.cp_inv) * f.transpose();
+                    let eig = nalgebra::SymmetricEigen::new(b_new);
+                    let ln_b = eig.eigenvalues.map(f64::ln);
+                    let dev = ln_b.add_scalar(-ln_b.sum() / 3.0);
+                    let expected = eig.eigenvectors
+                        * Matrix3::from_diagonal(&(dev * g))
+                        * eig.eigenvectors.transpose();
+                    let err = (r.tau_dev - expected).amax();
+                    assert!(
+                        err <= 1e-9 * r.tau_dev.amax().max(1e-3),
+                        "scale {scale} dt {dt}: tau_dev off by {err:e}"
+                    );
+                    let dvol = b_new.determinant() / b_trial.determinant() - 1.0;
+                    assert!(dvol.abs() < 1e-12, "elastic volume changed by {dvol:e}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn step_without_flow_keeps_the_state_exactly() {
+        // dt = 0: no creep, so Cp^-1 must come back bit for bit, not recomputed.
+        let m = mat(4.3);
+        let state = PointState {
+            cp_inv: [1.01, 0.995, 0.9951, 0.003, -0.002, 0.001],
+            eqps: 0.2,
+        };
+        let r = m
+            .update_deviatoric(&some_f(0.05), &state, 0.0, false)
+            .unwrap();
+        assert_eq!(r.dp, 0.0);
+        assert_eq!(r.state, state);
+    }
+
+    #[test]
     fn inverted_deformation_is_an_error() {
         let m = mat(2.8);
         let f = Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, -0.5));
