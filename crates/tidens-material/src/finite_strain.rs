@@ -28,10 +28,11 @@
 //! `ln(b)/2`, which is evaluated without cancellation; repeated eigenvalues need
 //! no special case.
 
+use crate::eigen3::symmetric_eigen;
 use crate::error::MaterialError;
 use crate::params::Material;
 use crate::state::PointState;
-use nalgebra::{Matrix3, SMatrix, SVector, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, SMatrix, Vector3};
 
 /// Spatial tangent `a` as a 9x9 matrix, row `3 i + j` for `g_ij`, column
 /// `3 k + l` for `l_kl`: the linearised virtual work is `g : a : l` per unit
@@ -69,22 +70,66 @@ fn sym_to6(m: &Matrix3<f64>) -> [f64; 6] {
     ]
 }
 
+/// `sum_A d_A v_A v_A^T` for the columns `v_A` of `v`, exactly symmetric.
+fn spectral_sum(v: &Matrix3<f64>, d: &Vector3<f64>) -> Matrix3<f64> {
+    let mut out = Matrix3::zeros();
+    for i in 0..3 {
+        for j in i..3 {
+            let x = d[0] * v[(i, 0)] * v[(j, 0)]
+                + d[1] * v[(i, 1)] * v[(j, 1)]
+                + d[2] * v[(i, 2)] * v[(j, 2)];
+            out[(i, j)] = x;
+            out[(j, i)] = x;
+        }
+    }
+    out
+}
+
+/// Below this `|x|`, `ln(1 + x) / x` comes from its Taylor series. The
+/// eigenvalue ratios of `b` in hot pressing (elastic strains of 1e-4 to 1e-3,
+/// 1e-2 at the most) fall there, which spares the tangent a `ln_1p` per
+/// eigenvalue pair at no cost in accuracy (truncation below 1e-19).
+const SERIES_LIMIT: f64 = 1e-2;
+
+/// `ln(1 + x) / x`, exact at `x = 0` and free of cancellation near it. The
+/// series runs through `x^8`; its truncation error is below `x^9 / 10`.
+fn ln1p_over_x(x: f64) -> f64 {
+    if x.abs() < SERIES_LIMIT {
+        const INV: [f64; 9] = [
+            1.0,
+            1.0 / 2.0,
+            1.0 / 3.0,
+            1.0 / 4.0,
+            1.0 / 5.0,
+            1.0 / 6.0,
+            1.0 / 7.0,
+            1.0 / 8.0,
+            1.0 / 9.0,
+        ];
+        INV[..8].iter().rev().fold(INV[8], |s, c| c - x * s)
+    } else {
+        x.ln_1p() / x
+    }
+}
+
 /// `(ln(b_a) - ln(b_b)) / (2 (b_a - b_b))`, the divided difference of `ln(b)/2`,
 /// accurate when `b_a` and `b_b` are equal or nearly so.
 fn half_log_divided_difference(ba: f64, bb: f64) -> f64 {
-    let x = ba / bb - 1.0;
-    let ln1p_over_x = if x.abs() < 1e-4 {
-        1.0 - x / 2.0 + x * x / 3.0 - x * x * x / 4.0
-    } else {
-        x.ln_1p() / x
-    };
-    0.5 * ln1p_over_x / bb
+    0.5 * ln1p_over_x(ba / bb - 1.0) / bb
 }
 
 /// The consistent spatial tangent (module docs), assembled in the global
-/// frame from the eigenvectors `n_A` (columns of `q`) as a sum of outer
-/// products of `vec(n_A n_B^T)`: the principal-frame tangent has only the
-/// (AA, BB), (AB, AB) and (AB, BA) entries.
+/// frame. With `m_AB = vec(n_A n_B^T)` (the eigenvectors `n_A` are the columns
+/// of `q`), the nine `m_AB` are an orthonormal basis of the 9x9 index space and
+///
+/// ```text
+/// a = sum_XY lambda_XY m_X m_Y^T,   X, Y in {AA, AB}
+/// ```
+///
+/// where `lambda` has only the (AA, BB) block and, for each pair A != B, the
+/// 2x2 block on (AB, BA). So `a = M^T W` with `W = lambda M` (rows `m_X`);
+/// `M = Q (x) Q` makes the product two 3x3 rotations per column of `W`, about
+/// 750 multiply-adds in all. `lambda` is symmetric, hence so is `a`.
 #[allow(clippy::too_many_arguments)]
 fn spatial_tangent(
     q: &Matrix3<f64>,
@@ -95,42 +140,64 @@ fn spatial_tangent(
     nvec: &Vector3<f64>,
     g_mod: f64,
 ) -> SpatialTangent {
-    // m[A][B] = vec(n_A n_B^T), index 3 i + j.
-    let mut m = [[SVector::<f64, 9>::zeros(); 3]; 3];
+    // m[3 A + B][3 i + j] = n_Ai n_Bj.
+    let mut m = [[0.0; 9]; 9];
     for aa in 0..3 {
         for bb in 0..3 {
             for i in 0..3 {
                 for j in 0..3 {
-                    m[aa][bb][3 * i + j] = q[(i, aa)] * q[(j, bb)];
+                    m[3 * aa + bb][3 * i + j] = q[(i, aa)] * q[(j, bb)];
                 }
             }
         }
     }
-    let two_g = 2.0 * g_mod;
-    let gamma = two_g * (dq_dtrial - beta);
-    let mut a = SpatialTangent::zeros();
+    let two_g_beta = 2.0 * g_mod * beta;
+    let gamma = 2.0 * g_mod * (dq_dtrial - beta);
+    // w[X] = sum_Y lambda_XY m[Y].
+    let mut w = [[0.0; 9]; 9];
     for aa in 0..3 {
-        // sum_B a[AA,BB] m_BB, then one outer product per A.
-        let mut col = SVector::<f64, 9>::zeros();
+        let mut d = [0.0; 3];
         for bb in 0..3 {
             let delta = if aa == bb { 1.0 } else { 0.0 };
-            let d_ab =
-                two_g * beta * (delta - 1.0 / 3.0) + gamma * nvec[aa] * nvec[bb] - tau[aa] * delta;
-            col += m[bb][bb] * d_ab;
+            d[bb] =
+                two_g_beta * (delta - 1.0 / 3.0) + gamma * nvec[aa] * nvec[bb] - tau[aa] * delta;
         }
-        a += m[aa][aa] * col.transpose();
+        let row = &mut w[4 * aa];
+        for r in 0..9 {
+            row[r] = d[0] * m[0][r] + d[1] * m[4][r] + d[2] * m[8][r];
+        }
     }
-    for aa in 0..3 {
-        for bb in 0..3 {
-            if aa == bb {
-                continue;
+    for (aa, bb) in [(0, 1), (0, 2), (1, 2)] {
+        // theta_AB = theta_BA, and theta_AB b_A - tau_A = theta_AB b_B - tau_B
+        // (module docs): one divided difference and one coupling per pair.
+        let theta = two_g_beta * half_log_divided_difference(b[aa], b[bb]);
+        let c = theta * b[aa] - tau[aa];
+        let (x, y) = (3 * aa + bb, 3 * bb + aa);
+        let (ab, ba) = (theta * b[bb], theta * b[aa]);
+        for r in 0..9 {
+            w[x][r] = ab * m[x][r] + c * m[y][r];
+            w[y][r] = c * m[x][r] + ba * m[y][r];
+        }
+    }
+    // a = M^T W column by column: column kl of W, read as the 3x3 matrix
+    // T[A][B] = w[3 A + B][kl], maps to Q T Q^T (M = Q (x) Q), which takes 54
+    // multiply-adds per column instead of 81.
+    let mut out = [0.0; 81];
+    for (kl, col) in out.chunks_exact_mut(9).enumerate() {
+        let mut p = [[0.0; 3]; 3];
+        for i in 0..3 {
+            for bb in 0..3 {
+                p[i][bb] =
+                    q[(i, 0)] * w[bb][kl] + q[(i, 1)] * w[3 + bb][kl] + q[(i, 2)] * w[6 + bb][kl];
             }
-            let theta = two_g * beta * half_log_divided_difference(b[aa], b[bb]);
-            let col = m[aa][bb] * (theta * b[bb]) + m[bb][aa] * (theta * b[aa] - tau[aa]);
-            a += m[aa][bb] * col.transpose();
+        }
+        for i in 0..3 {
+            for j in 0..3 {
+                col[3 * i + j] = p[i][0] * q[(j, 0)] + p[i][1] * q[(j, 1)] + p[i][2] * q[(j, 2)];
+            }
         }
     }
-    a
+    SpatialTangent::from_column_slice(&out)
 }
 
 impl Material {
@@ -149,8 +216,10 @@ impl Material {
             return Err(MaterialError::Inverted { det_f });
         }
         let g_mod = self.shear_modulus();
-        let b_trial = f * sym_from6(&state.cp_inv) * f.transpose();
-        let eig = SymmetricEigen::new(b_trial);
+        // F Cp^-1 serves twice: for b_trial and for Cp^-1 at the end.
+        let f_cp = f * sym_from6(&state.cp_inv);
+        let b_trial = f_cp * f.transpose();
+        let eig = symmetric_eigen(&b_trial);
         let q_mat = eig.eigenvectors;
         let b = eig.eigenvalues;
         if b.iter().any(|&x| !(x > 0.0)) {
@@ -172,17 +241,29 @@ impl Material {
 
         let tangent = with_tangent
             .then(|| spatial_tangent(&q_mat, &b, &tau, beta, rm.dq_dtrial, &nvec, g_mod));
-        let tau_dev = q_mat * Matrix3::from_diagonal(&tau) * q_mat.transpose();
-        // Elastic log strain after the return: deviator scaled by beta, volume kept.
-        let b_new_diag = Vector3::from_fn(|a, _| (2.0 * (beta * e[a] + eps_vol / 3.0)).exp());
-        let b_new = q_mat * Matrix3::from_diagonal(&b_new_diag) * q_mat.transpose();
-        let f_inv = f.try_inverse().ok_or(MaterialError::Inverted { det_f })?;
-        let cp_inv = f_inv * b_new * f_inv.transpose();
+        let tau_dev = spectral_sum(&q_mat, &tau);
+        // Cp^-1 at the end of the step. The return keeps the elastic volume and
+        // scales the elastic log-strain deviator by beta, so b_new = F Cp^-1 F^T
+        // has the eigenvectors n_A of b_trial and the eigenvalues b_A r_A,
+        // r_A = exp(2 (beta - 1) e_A), whose product is 1 (isochoric flow).
+        // From b_trial n_A = b_A n_A, F^-1 n_A = g_A / b_A with
+        // g_A = Cp^-1 F^T n_A = (F Cp^-1)^T n_A, hence
+        // Cp^-1 = F^-1 b_new F^-T = sum_A (r_A / b_A) g_A g_A^T: no inverse of F.
+        // Without plastic flow the state is kept as it is, free of round-off.
+        let cp_inv = if rm.dp > 0.0 {
+            let r0 = (2.0 * (beta - 1.0) * e[0]).exp();
+            let r1 = (2.0 * (beta - 1.0) * e[1]).exp();
+            let r = Vector3::new(r0, r1, 1.0 / (r0 * r1));
+            let g = f_cp.transpose() * q_mat;
+            sym_to6(&spectral_sum(&g, &r.component_div(&b)))
+        } else {
+            state.cp_inv
+        };
         Ok(DeviatoricResponse {
             tau_dev,
             tangent,
             state: PointState {
-                cp_inv: sym_to6(&cp_inv),
+                cp_inv,
                 eqps: state.eqps + rm.dp,
             },
             q: rm.q,
@@ -316,6 +397,62 @@ mod tests {
         assert!(r.dp > 0.01);
         let det = sym_from6(&r.state.cp_inv).determinant();
         assert!((det - 1.0).abs() < 1e-12, "det Cp^-1 = {det}");
+    }
+
+    #[test]
+    fn end_state_carries_the_returned_stress() {
+        // Hencky elasticity at the end of the step: with b_new = F Cp^-1 F^T
+        // from the returned state, tau_dev = G dev(ln b_new), and the elastic
+        // volume is the trial one (det b_new = det b_trial).
+        let m = mat(2.8);
+        let g = m.shear_modulus();
+        let prestrained = PointState {
+            cp_inv: sym_to6(&{
+                let fp: Matrix3<f64> = Matrix3::new(1.1, 0.05, 0.0, 0.0, 0.95, 0.02, 0.0, 0.0, 1.0);
+                let fp = fp / fp.determinant().cbrt();
+                let fpi = fp.try_inverse().unwrap();
+                fpi * fpi.transpose()
+            }),
+            eqps: 0.1,
+        };
+        for &scale in &[1e-3, 0.05, 1.0] {
+            for state in [PointState::default(), prestrained] {
+                let f = some_f(scale);
+                for &dt in &[1e-2, 10.0, 1e4] {
+                    let r = m.update_deviatoric(&f, &state, dt, false).unwrap();
+                    let b_trial = f * sym_from6(&state.cp_inv) * f.transpose();
+                    let b_new = f * sym_from6(&r.state.cp_inv) * f.transpose();
+                    let eig = nalgebra::SymmetricEigen::new(b_new);
+                    let ln_b = eig.eigenvalues.map(f64::ln);
+                    let dev = ln_b.add_scalar(-ln_b.sum() / 3.0);
+                    let expected = eig.eigenvectors
+                        * Matrix3::from_diagonal(&(dev * g))
+                        * eig.eigenvectors.transpose();
+                    let err = (r.tau_dev - expected).amax();
+                    assert!(
+                        err <= 1e-9 * r.tau_dev.amax().max(1e-3),
+                        "scale {scale} dt {dt}: tau_dev off by {err:e}"
+                    );
+                    let dvol = b_new.determinant() / b_trial.determinant() - 1.0;
+                    assert!(dvol.abs() < 1e-12, "elastic volume changed by {dvol:e}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn step_without_flow_keeps_the_state_exactly() {
+        // dt = 0: no creep, so Cp^-1 must come back bit for bit, not recomputed.
+        let m = mat(4.3);
+        let state = PointState {
+            cp_inv: [1.01, 0.995, 0.9951, 0.003, -0.002, 0.001],
+            eqps: 0.2,
+        };
+        let r = m
+            .update_deviatoric(&some_f(0.05), &state, 0.0, false)
+            .unwrap();
+        assert_eq!(r.dp, 0.0);
+        assert_eq!(r.state, state);
     }
 
     #[test]

@@ -2,8 +2,8 @@
 //!
 //! One law, in two layers:
 //! - [`Material`]: Hencky (logarithmic) isotropic elasticity with von Mises (J2)
-//!   Norton viscoplasticity, `eps_dot = C q^n`, zero yield stress, isochoric flow
-//!   (DESIGN.md section 3). Its scalar backward-Euler return is
+//!   Norton viscoplasticity, `eps_dot = C q^n`, zero yield stress, isochoric
+//!   flow. Its scalar backward-Euler return is
 //!   [`Material::return_map`].
 //! - [`Material::update_deviatoric`]: the finite-strain material point, the
 //!   multiplicative split `F = Fe Fp` integrated with the exponential map. It
@@ -11,8 +11,10 @@
 //!   the volumetric (purely elastic) part is left to the element, which uses the
 //!   element's mean dilatation (see `tidens-fem`).
 //!
-//! Presets for the seed's six materials are in [`Preset`].
+//! Presets for the seed's six materials are in [`Preset`]; the 3x3 symmetric
+//! eigen-solver behind the return is [`symmetric_eigen`].
 
+mod eigen3;
 mod error;
 mod finite_strain;
 mod params;
@@ -20,6 +22,7 @@ mod presets;
 mod return_map;
 mod state;
 
+pub use eigen3::{SymmetricEigen3, symmetric_eigen};
 pub use error::MaterialError;
 pub use finite_strain::{DeviatoricResponse, SpatialTangent};
 pub use params::Material;

@@ -16,13 +16,15 @@ pub struct ReturnMap {
 impl Material {
     /// Backward-Euler return of `eps_dot = C q^n` from the elastic trial state.
     ///
-    /// Solves `q + 3 G C dt q^n = q_trial` for `0 <= q <= q_trial` (DESIGN.md
-    /// section 3). The left side is increasing and convex in `q`, so Newton from
-    /// any upper bound of the root decreases monotonically onto it. The start
+    /// Solves `q + 3 G C dt q^n = q_trial` for `0 <= q <= q_trial`, the
+    /// backward-Euler step written in a form that stays stable for stiff `n`.
+    /// The left side is increasing and convex in `q`, so Newton from any upper
+    /// bound of the root decreases monotonically onto it. The start
     /// `q0 = min(q_trial, (q_trial / (3 G C dt))^(1/n))` is such a bound and is
     /// already close to the root when the viscous term dominates, which keeps
     /// the iteration count small for any `n` and `C dt`. Powers are taken in log
-    /// form so `q^n` cannot overflow for large `n`.
+    /// form so `q^n` cannot overflow for large `n`; each iteration costs one
+    /// `ln` and one `exp`, and the tangent `dq/dq_trial` none.
     pub fn return_map(&self, q_trial: f64, dt: f64) -> ReturnMap {
         let n = self.creep_n;
         let k = 3.0 * self.shear_modulus() * self.creep_c * dt;
@@ -45,25 +47,45 @@ impl Material {
         }
         let ln_k = k.ln();
         let ln_qt = q_trial.ln();
-        // (q_trial / k)^(1/n), in logs.
-        let mut q = ((ln_qt - ln_k) / n).exp().min(q_trial);
+        // Start at q0 = min(q_trial, (q_trial / k)^(1/n)), in logs, together
+        // with k q0^(n-1): at the viscous bound k q0^n = q_trial, so it costs a
+        // division only.
+        let ln_qv = (ln_qt - ln_k) / n;
+        let (mut q, mut kqn1) = if ln_qv < ln_qt {
+            let qv = ln_qv.exp();
+            (qv, q_trial / qv)
+        } else {
+            (q_trial, (ln_k + (n - 1.0) * ln_qt).exp())
+        };
+        // Newton from above on the convex, increasing left side: the error
+        // left after a step `s` is at most (n - 1) s^2 / (2 q) (the ratio
+        // f'' / f' is below (n - 1) / q), so once (n - 1) s^2 <= eps q^2 the
+        // iterate is within half an ulp of the root and the confirming
+        // iteration is skipped. k q^(n-1) stays in log form so q^n cannot
+        // overflow for large n; q > 0 throughout because Newton from above
+        // never passes the (positive) root.
+        let converged_within = f64::EPSILON / (n - 1.0);
         let mut iterations = 0;
-        // k q^(n-1) in log form; q > 0 throughout because Newton from above on
-        // a convex increasing function never passes the (positive) root.
-        let kq = |q: f64| (ln_k + (n - 1.0) * q.ln()).exp();
         for _ in 0..100 {
             iterations += 1;
-            let kqn1 = kq(q);
             let f = q + kqn1 * q - q_trial;
             let df = 1.0 + n * kqn1;
             let step = f / df;
             q -= step;
-            if step.abs() <= 1e-15 * q_trial || q <= 0.0 {
+            if step.abs() <= 1e-15 * q_trial || step * step <= converged_within * q * q || q <= 0.0
+            {
                 break;
             }
+            kqn1 = (ln_k + (n - 1.0) * q.ln()).exp();
         }
         let q = q.clamp(0.0, q_trial);
-        let dq_dtrial = 1.0 / (1.0 + n * kq(q));
+        // At the root k q^(n-1) = (q_trial - q) / q, so the derivative of the
+        // scalar equation needs no further power.
+        let dq_dtrial = if q > 0.0 {
+            q / (q + n * (q_trial - q))
+        } else {
+            0.0
+        };
         ReturnMap {
             q,
             dp: (q_trial - q) / (3.0 * self.shear_modulus()),
