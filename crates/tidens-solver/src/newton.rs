@@ -116,30 +116,14 @@ impl Simulation {
         let state = &self.state;
         let mut u = state.u.clone();
         let mut piston = state.piston;
-        let quadratic = std::env::var_os("TIDENS_PREDICTOR2").is_some();
         if self.settings.newton.extrapolate
             && let Some(prev) = &state.previous
         {
-            match &state.before_previous {
-                Some(pp) if quadratic => {
-                    // Lagrange extrapolation through the last three states.
-                    let (h1, h2, h) = (pp.dt, prev.dt, dt);
-                    let w2 = (h + h2 + h1) * (h + h2) / ((h2 + h1) * h2);
-                    let w1 = -(h + h2 + h1) * h / (h1 * h2);
-                    let w0 = (h + h2) * h / (h1 * (h2 + h1));
-                    for ((x, xp), xpp) in u.iter_mut().zip(&prev.u).zip(&pp.u) {
-                        *x = w2 * *x + w1 * xp + w0 * xpp;
-                    }
-                    piston = w2 * piston + w1 * prev.piston + w0 * pp.piston;
-                }
-                _ => {
-                    let ratio = dt / prev.dt;
-                    for (x, xp) in u.iter_mut().zip(&prev.u) {
-                        *x += ratio * (*x - xp);
-                    }
-                    piston += ratio * (piston - prev.piston);
-                }
+            let ratio = dt / prev.dt;
+            for (x, xp) in u.iter_mut().zip(&prev.u) {
+                *x += ratio * (*x - xp);
             }
+            piston += ratio * (piston - prev.piston);
         }
         self.constraints.enforce(&mut u, piston);
         (u, piston)
@@ -330,6 +314,13 @@ impl Simulation {
                 }
                 let pt = piston + s * du[n];
                 self.constraints.enforce(&mut ut, pt);
+                // A node just caught by a plane goes the same fraction of its
+                // way onto it as the rest of the step: putting it right on
+                // the plane while its neighbours move part of the way would
+                // strain the elements around it out of all proportion.
+                for &(d, _) in &offsets {
+                    ut[d] = u[d] + s * (ut[d] - u[d]);
+                }
                 let ev = self.evaluate(&ut, dt, false).ok()?;
                 let rt = self.residual(&ev.f_int, &map, force);
                 let norm_sq = rt.iter().map(|x| x * x).sum();

@@ -46,8 +46,6 @@ pub(crate) struct ConvergedState {
     pub contact: ContactEvaluation,
     /// The step that led here.
     pub previous: Option<PreviousStep>,
-    /// The step before that.
-    pub before_previous: Option<PreviousStep>,
 }
 
 /// The contact state of the planes and of the particles, saved before a
@@ -193,7 +191,6 @@ impl Simulation {
                 fields: eval.fields(),
                 contact: ContactEvaluation::default(),
                 previous: None,
-                before_previous: None,
             },
             curve: Vec::new(),
             stats: RunStats::default(),
@@ -451,7 +448,6 @@ impl Simulation {
         self.body.commit(&s.eval.body);
         let volume = s.eval.body.volume();
         let state = &mut self.state;
-        state.before_previous = state.previous.take();
         state.previous = Some(PreviousStep {
             u: std::mem::take(&mut state.u),
             piston: state.piston,
