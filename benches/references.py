@@ -85,7 +85,7 @@ def observed_order(h: list[float], t: list[float]) -> float | None:
     ratio = d1 / d2
 
     def f(p: float) -> float:
-        return (h[0] ** p - h[1] ** p) / (h[1] ** p - h[2] ** p) - ratio
+        return float((h[0] ** p - h[1] ** p) / (h[1] ** p - h[2] ** p) - ratio)
 
     lo, hi = 0.2, 8.0
     if f(lo) * f(hi) > 0:
@@ -102,7 +102,7 @@ def observed_order(h: list[float], t: list[float]) -> float | None:
 def extrapolate(h: list[float], t: list[float], p: float) -> float:
     """Richardson from the last two points with order p."""
     (h1, h2), (t1, t2) = h[-2:], t[-2:]
-    return t2 + (t2 - t1) * h2**p / (h1**p - h2**p)
+    return float(t2 + (t2 - t1) * h2**p / (h1**p - h2**p))
 
 
 def ladder(xs: list[float], ts: list[float], default_order: float) -> dict[str, Any]:
@@ -134,7 +134,8 @@ def main(argv: list[str] | None = None) -> None:
             print(f"# run {key}", file=sys.stderr, flush=True)
             data["runs"][key] = run(case, level, tol)
             args.out.write_text(json.dumps(data, indent=1) + "\n")
-        return data["runs"][key]
+        found: dict[str, Any] = data["runs"][key]
+        return found
 
     for case in args.cases:
         _, _, until = CASES[case]

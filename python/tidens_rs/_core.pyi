@@ -21,12 +21,16 @@ __all__ = [
     "PRESET_NAMES",
     "CONTACT_MODES",
     "DEFAULT_SIZE_RATIO",
+    "SOLVER_DEFAULTS",
+    "ELEMENTS",
 ]
 
 __version__: str
 PRESET_NAMES: list[str]
 CONTACT_MODES: list[str]
 DEFAULT_SIZE_RATIO: float
+SOLVER_DEFAULTS: dict[str, Any]
+ELEMENTS: list[str]
 
 _Octant: TypeAlias = tuple[tuple[bool, bool, bool], float, float]
 
@@ -106,22 +110,22 @@ class Simulation:
         ramp_time_s: float = 1.0,
         until_density: float | None = None,
         until_time_s: float | None = None,
-        mesh_level: int = 3,
-        grading: float = 1.0,
-        exact_volume: bool = False,
-        element: str = "hex8",
-        tolerance: float = 0.01,
-        max_strain_increment: float = 0.2,
+        mesh_level: int | None = None,
+        grading: float | None = None,
+        exact_volume: bool | None = None,
+        element: str | None = None,
+        tolerance: float | None = None,
+        max_strain_increment: float | None = None,
         dt_initial_s: float | None = None,
-        dt_max_s: float = ...,
-        max_steps: int = 100000,
+        dt_max_s: float | None = None,
+        max_steps: int | None = None,
         time_targets_s: list[float] = ...,
-        newton_max_iterations: int = 25,
-        newton_residual_tolerance: float = 1e-6,
+        newton_max_iterations: int | None = None,
+        newton_residual_tolerance: float | None = None,
         contact: str = "frictionless",
         tied_planes: bool = False,
-        contact_penalty_factor: float = 10.0,
-        penetration_tolerance: float = 1e-4,
+        contact_penalty_factor: float | None = None,
+        penetration_tolerance: float | None = None,
     ) -> Simulation: ...
     def advance(self) -> dict[str, float]:
         """One converged step (GIL released); returns its curve point."""

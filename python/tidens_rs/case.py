@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field
@@ -10,12 +9,14 @@ from pathlib import Path
 from typing import Any
 
 from . import _core, io
-from ._core import CONTACT_MODES, Cell, ConvergenceError, Material
+from ._core import CONTACT_MODES, SOLVER_DEFAULTS, Cell, ConvergenceError, Material
 from .result import Result
 from .snapshot import Snapshot
 
-DEFAULT_MESH_LEVEL = 3
-DEFAULT_TOLERANCE = 0.01
+# The defaults are the core's (one source); these two are named because
+# scripts and the command line quote them.
+DEFAULT_MESH_LEVEL: int = SOLVER_DEFAULTS["mesh_level"]
+DEFAULT_TOLERANCE: float = SOLVER_DEFAULTS["tolerance"]
 
 
 @dataclass(frozen=True)
@@ -77,17 +78,17 @@ class SolverSettings:
 
     mesh_level: int = DEFAULT_MESH_LEVEL
     tolerance: float = DEFAULT_TOLERANCE
-    grading: float = 1.0
-    exact_volume: bool = False
-    element: str = "hex8"
-    max_strain_increment: float = 0.2
-    dt_initial_s: float | None = None
-    dt_max_s: float = math.inf
-    max_steps: int = 100_000
-    newton_max_iterations: int = 25
-    newton_residual_tolerance: float = 1e-6
-    contact_penalty_factor: float = 10.0
-    penetration_tolerance: float = 1e-4
+    grading: float = SOLVER_DEFAULTS["grading"]
+    exact_volume: bool = SOLVER_DEFAULTS["exact_volume"]
+    element: str = SOLVER_DEFAULTS["element"]
+    max_strain_increment: float = SOLVER_DEFAULTS["max_strain_increment"]
+    dt_initial_s: float | None = SOLVER_DEFAULTS["dt_initial_s"]
+    dt_max_s: float = SOLVER_DEFAULTS["dt_max_s"]
+    max_steps: int = SOLVER_DEFAULTS["max_steps"]
+    newton_max_iterations: int = SOLVER_DEFAULTS["newton_max_iterations"]
+    newton_residual_tolerance: float = SOLVER_DEFAULTS["newton_residual_tolerance"]
+    contact_penalty_factor: float = SOLVER_DEFAULTS["contact_penalty_factor"]
+    penetration_tolerance: float = SOLVER_DEFAULTS["penetration_tolerance"]
 
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)

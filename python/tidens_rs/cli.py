@@ -11,13 +11,17 @@ from __future__ import annotations
 
 import argparse
 import sys
+import threading
 from collections.abc import Sequence
 from pathlib import Path
 
 from . import cells, materials
-from ._core import CONTACT_MODES, Cell, ConvergenceError, Material, TidensError, __version__
+from ._core import CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, TidensError, __version__
 from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings
 from .result import MARK_DENSITIES, Result
+
+# The solver defaults, as the Python API has them (the core's).
+_DEFAULTS = SolverSettings()
 
 
 def _float_list(text: str) -> list[float]:
@@ -53,10 +57,10 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("numerics")
     g.add_argument("--mesh-level", type=int, default=DEFAULT_MESH_LEVEL, help=f"mesh level, 1 (coarsest) to 6; each level refines the elements by about sqrt(2) (default {DEFAULT_MESH_LEVEL})")
     g.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE, help=f"time-integration accuracy, relative error of t(rho) (default {DEFAULT_TOLERANCE:g})")
-    g.add_argument("--grading", type=float, default=1.0, help="element-size ratio toward the contact points (default 1)")
+    g.add_argument("--grading", type=float, default=_DEFAULTS.grading, help=f"element-size ratio toward the contact points (default {_DEFAULTS.grading:g})")
     g.add_argument("--exact-volume", action="store_true", help="move each particle's surface nodes outward (contact points kept on the surface) so that its mesh has the exact spheroid volume")
-    g.add_argument("--element", choices=("hex8", "tet10"), default="hex8", help="hex8: mean-dilatation hexahedra (default); tet10: quadratic tetrahedra with one pressure, cut from the same blocks (single-particle cells only)")
-    g.add_argument("--max-steps", type=int, default=100_000, help="step limit (default 100000)")
+    g.add_argument("--element", choices=ELEMENTS, default=_DEFAULTS.element, help=f"hex8: mean-dilatation hexahedra; tet10: quadratic tetrahedra with one pressure, cut from the same blocks (single-particle cells only); default {_DEFAULTS.element}")
+    g.add_argument("--max-steps", type=int, default=_DEFAULTS.max_steps, help=f"step limit (default {_DEFAULTS.max_steps})")
     g = p.add_argument_group("output")
     g.add_argument("--out", type=Path, required=True, help="output directory")
     g.add_argument("--vtu-densities", type=_float_list, help="comma-separated densities for VTU snapshots (default those of 0.6,0.7,0.8,0.9 above the cell's rho0)")
@@ -124,9 +128,21 @@ def _report(result: Result) -> None:
     )
 
 
+def _import_matplotlib() -> None:
+    """Imports what the plot needs; run in a thread while the solver (which
+    releases the GIL) computes, so that the plot does not wait for it."""
+    try:
+        import matplotlib.backends.backend_agg  # noqa: F401
+        import matplotlib.figure  # noqa: F401
+    except ImportError:
+        pass  # reported where the plot is made
+
+
 def _run(args: argparse.Namespace) -> int:
     if args.until_density is None and args.until_time is None:
         raise ValueError("give --until-density, --until-time or both")
+    if not args.no_plot:
+        threading.Thread(target=_import_matplotlib, daemon=True).start()
     case = Case(
         cell=_cell(args),
         material=_material(args),

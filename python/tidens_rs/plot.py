@@ -20,7 +20,9 @@ def plot_density(result: Result) -> Figure:
     from matplotlib.figure import Figure
 
     c = result.case
-    fig = Figure(figsize=(10, 4), layout="constrained")
+    fig = Figure(figsize=(10, 4))
+    # Fixed margins: a layout engine would draw the figure twice.
+    fig.subplots_adjust(left=0.07, right=0.99, bottom=0.12, top=0.92, wspace=0.22)
     axes = fig.subplots(1, 2)
     t, rho = result.time_s, result.rel_density
     rho_end = float(max(rho[-1], c.cell.rho0 + 1e-3))

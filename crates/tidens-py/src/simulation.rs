@@ -60,15 +60,47 @@ fn element_particles(scene: &Scene) -> Vec<i64> {
     }
 }
 
+/// The Python names of the elements, the default first.
+pub(crate) const ELEMENTS: [(&str, ElementKind); 2] =
+    [("hex8", ElementKind::Hex8), ("tet10", ElementKind::Tet10)];
+
 /// The element kind called `name`.
 fn element_kind(name: &str) -> PyResult<ElementKind> {
-    match name {
-        "hex8" => Ok(ElementKind::Hex8),
-        "tet10" => Ok(ElementKind::Tet10),
-        _ => Err(PyValueError::new_err(format!(
-            "element = '{name}': must be one of hex8, tet10"
-        ))),
-    }
+    ELEMENTS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|&(_, kind)| kind)
+        .ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "element = '{name}': must be one of hex8, tet10"
+            ))
+        })
+}
+
+/// The defaults of every solver knob, keyed by the Python argument names
+/// (None where the core picks the value from the case, as the first step).
+pub(crate) fn solver_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let s = Settings::new(LoadHistory {
+        stress: 1.0,
+        knockdown: 1.0,
+        ramp_time: 1.0,
+    });
+    let m = MeshOptions::default();
+    let d = PyDict::new(py);
+    d.set_item("mesh_level", m.level)?;
+    d.set_item("tolerance", s.tolerance)?;
+    d.set_item("grading", m.grading)?;
+    d.set_item("exact_volume", m.exact_volume)?;
+    d.set_item("element", ELEMENTS[0].0)?;
+    d.set_item("max_strain_increment", s.max_strain_increment)?;
+    d.set_item("dt_initial_s", s.dt_initial)?;
+    d.set_item("dt_max_s", s.dt_max)?;
+    d.set_item("max_steps", s.max_steps)?;
+    d.set_item("newton_max_iterations", s.newton.max_iterations)?;
+    d.set_item("newton_residual_tolerance", s.newton.residual_tolerance)?;
+    d.set_item("contact_penalty_factor", s.contact.penalty_factor)?;
+    d.set_item("penetration_tolerance", s.contact.penetration_tolerance)?;
+    Ok(d)
 }
 
 /// What readers on other threads see: refreshed after every step.
@@ -172,22 +204,22 @@ impl PySimulation {
         ramp_time_s = 1.0,
         until_density = None,
         until_time_s = None,
-        mesh_level = 3,
-        grading = 1.0,
-        exact_volume = false,
-        element = "hex8",
-        tolerance = 0.01,
-        max_strain_increment = 0.2,
+        mesh_level = None,
+        grading = None,
+        exact_volume = None,
+        element = None,
+        tolerance = None,
+        max_strain_increment = None,
         dt_initial_s = None,
-        dt_max_s = f64::INFINITY,
-        max_steps = 100_000,
+        dt_max_s = None,
+        max_steps = None,
         time_targets_s = Vec::new(),
-        newton_max_iterations = 25,
-        newton_residual_tolerance = 1e-6,
+        newton_max_iterations = None,
+        newton_residual_tolerance = None,
         contact = "frictionless",
         tied_planes = false,
-        contact_penalty_factor = 10.0,
-        penetration_tolerance = 1e-4,
+        contact_penalty_factor = None,
+        penetration_tolerance = None,
     ))]
     // The Python keyword arguments: one per solver knob.
     #[allow(clippy::too_many_arguments)]
@@ -200,22 +232,22 @@ impl PySimulation {
         ramp_time_s: f64,
         until_density: Option<f64>,
         until_time_s: Option<f64>,
-        mesh_level: i64,
-        grading: f64,
-        exact_volume: bool,
-        element: &str,
-        tolerance: f64,
-        max_strain_increment: f64,
+        mesh_level: Option<i64>,
+        grading: Option<f64>,
+        exact_volume: Option<bool>,
+        element: Option<&str>,
+        tolerance: Option<f64>,
+        max_strain_increment: Option<f64>,
         dt_initial_s: Option<f64>,
-        dt_max_s: f64,
-        max_steps: i64,
+        dt_max_s: Option<f64>,
+        max_steps: Option<i64>,
         time_targets_s: Vec<f64>,
-        newton_max_iterations: i64,
-        newton_residual_tolerance: f64,
+        newton_max_iterations: Option<i64>,
+        newton_residual_tolerance: Option<f64>,
         contact: &str,
         tied_planes: bool,
-        contact_penalty_factor: f64,
-        penetration_tolerance: f64,
+        contact_penalty_factor: Option<f64>,
+        penetration_tolerance: Option<f64>,
     ) -> PyResult<Self> {
         if until_density.is_none() && until_time_s.is_none() {
             return Err(pyo3::exceptions::PyValueError::new_err(
@@ -223,36 +255,50 @@ impl PySimulation {
                  condition (until_density in (rho0, 1), until_time_s > 0 s)",
             ));
         }
-        let level = u32::try_from(mesh_level).map_err(|_| mesh_level_error(mesh_level))?;
+        // A knob left at None takes the core's default (the one source of
+        // the defaults, also published as SOLVER_DEFAULTS).
+        let load = LoadHistory {
+            stress: stress_mpa,
+            knockdown,
+            ramp_time: ramp_time_s,
+        };
+        let defaults = Settings::new(load);
+        let mesh_defaults = MeshOptions::default();
+        let level = match mesh_level {
+            Some(l) => u32::try_from(l).map_err(|_| mesh_level_error(l))?,
+            None => mesh_defaults.level,
+        };
+        let newton = &defaults.newton;
+        let contact_defaults = &defaults.contact;
         let settings = Settings {
             until_density,
             until_time: until_time_s,
-            tolerance,
-            max_strain_increment,
+            tolerance: tolerance.unwrap_or(defaults.tolerance),
+            max_strain_increment: max_strain_increment.unwrap_or(defaults.max_strain_increment),
             dt_initial: dt_initial_s,
-            dt_max: dt_max_s,
-            max_steps: count("max_steps", max_steps, ">= 1")?,
+            dt_max: dt_max_s.unwrap_or(defaults.dt_max),
+            max_steps: match max_steps {
+                Some(m) => count("max_steps", m, ">= 1")?,
+                None => defaults.max_steps,
+            },
             time_targets: time_targets_s,
             newton: NewtonSettings {
-                max_iterations: count(
-                    "newton_max_iterations",
-                    newton_max_iterations,
-                    "in [1, 1000]",
-                )?,
-                residual_tolerance: newton_residual_tolerance,
-                ..NewtonSettings::default()
+                max_iterations: match newton_max_iterations {
+                    Some(m) => count("newton_max_iterations", m, "in [1, 1000]")?,
+                    None => newton.max_iterations,
+                },
+                residual_tolerance: newton_residual_tolerance
+                    .unwrap_or(newton.residual_tolerance),
+                ..newton.clone()
             },
             contact: ContactOptions {
                 mode: contact_mode(contact)?,
                 tied_planes,
-                penalty_factor: contact_penalty_factor,
-                penetration_tolerance,
+                penalty_factor: contact_penalty_factor.unwrap_or(contact_defaults.penalty_factor),
+                penetration_tolerance: penetration_tolerance
+                    .unwrap_or(contact_defaults.penetration_tolerance),
             },
-            ..Settings::new(LoadHistory {
-                stress: stress_mpa,
-                knockdown,
-                ramp_time: ramp_time_s,
-            })
+            ..defaults.clone()
         };
         // Cheap checks first, so bad input fails before the mesh is built.
         settings
@@ -262,10 +308,10 @@ impl PySimulation {
         let material = material.get().inner;
         let options = MeshOptions {
             level,
-            grading,
-            exact_volume,
+            grading: grading.unwrap_or(mesh_defaults.grading),
+            exact_volume: exact_volume.unwrap_or(mesh_defaults.exact_volume),
         };
-        let kind = element_kind(element)?;
+        let kind = element_kind(element.unwrap_or(ELEMENTS[0].0))?;
         let (sim, element_particle) = py
             .detach(move || {
                 let scene = Scene::from_cell(&cell, &options)?.with_element(kind)?;
