@@ -37,17 +37,9 @@ from pathlib import Path
 from typing import Any
 
 import tidens_rs as td
+from speed_cases import CASES, MARKS
 
 HERE = Path(__file__).resolve().parent
-MARKS = (0.8, 0.9, 0.95)
-# name: (cell, stress [MPa], target density)
-CASES: dict[str, tuple[str, float, float]] = {
-    "sc10": ("sc", 10.0, 0.9),
-    "sc": ("sc", 15.0, 0.95),
-    "bcc": ("bcc", 15.0, 0.95),
-    "fcc": ("fcc", 15.0, 0.95),
-    "sc2": ("sc2", 15.0, 0.95),
-}
 # Inner-cube divisions of the mesh levels (element size ~ 1 / divisions).
 DIVISIONS = {1: 4, 2: 6, 3: 8, 4: 11, 5: 16, 6: 23}
 

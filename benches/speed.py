@@ -33,36 +33,12 @@ import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+from speed_cases import CASES, MARKS
+from tidens_rs.io import read_curve
+from tidens_rs.result import interpolate_time
 
 HERE = Path(__file__).resolve().parent
 REFERENCES = HERE / "references.json"
-MARKS = (0.8, 0.9, 0.95)
-
-# name: (cell, stress [MPa], target density)
-CASES: dict[str, tuple[str, float, float]] = {
-    "sc10": ("sc", 10.0, 0.9),
-    "sc": ("sc", 15.0, 0.95),
-    "bcc": ("bcc", 15.0, 0.95),
-    "fcc": ("fcc", 15.0, 0.95),
-    "sc2": ("sc2", 15.0, 0.95),
-}
-
-
-def time_to(curve: dict[str, np.ndarray], rho: float) -> float | None:
-    """First time [s] the density reaches ``rho``, linear between steps."""
-    t, r = curve["time_s"], curve["rel_density"]
-    above = np.nonzero(r >= rho)[0]
-    if len(above) == 0 or above[0] == 0:
-        return None
-    k = int(above[0])
-    w = (rho - r[k - 1]) / (r[k] - r[k - 1])
-    return float(t[k - 1] + w * (t[k] - t[k - 1]))
-
-
-def read_curve(path: Path) -> dict[str, np.ndarray]:
-    data = np.genfromtxt(path, delimiter=",", names=True)
-    return {name: np.atleast_1d(data[name]) for name in data.dtype.names or ()}
 
 
 def run_once(tidens: str, name: str, out: Path, extra: list[str], env: dict[str, str]) -> dict[str, Any]:
@@ -92,7 +68,7 @@ def run_once(tidens: str, name: str, out: Path, extra: list[str], env: dict[str,
         "dofs": summary["degrees_of_freedom"],
         "mesh_level": summary["mesh_level"],
         "tolerance": summary["tolerance"],
-        "times": {f"{r:g}": time_to(curve, r) for r in MARKS},
+        "times": {f"{r:g}": interpolate_time(curve["time_s"], curve["rel_density"], r) for r in MARKS},
     }
 
 

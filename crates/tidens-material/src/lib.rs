@@ -11,7 +11,7 @@
 //!   the volumetric (purely elastic) part is left to the element, which uses the
 //!   element's mean dilatation (see `tidens-fem`).
 //!
-//! Presets for the seed's six materials are in [`Preset`]; the 3x3 symmetric
+//! Presets for the paper's six materials are in [`Preset`]; the 3x3 symmetric
 //! eigen-solver behind the return is [`symmetric_eigen`].
 
 mod eigen3;

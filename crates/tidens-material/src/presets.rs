@@ -1,13 +1,13 @@
 use crate::error::MaterialError;
 use crate::params::Material;
 
-/// Default Young's modulus [MPa]: the value implied by the seed's creep
+/// Default Young's modulus [MPa]: the value implied by the paper's creep
 /// tolerance (2.3e-6 for 0.1 MPa), plausible for Ti-6Al-4V near 1293 K.
 pub const DEFAULT_YOUNG_MPA: f64 = 4.35e4;
 /// Default Poisson's ratio.
 pub const DEFAULT_POISSON: f64 = 0.3;
 
-/// The seed's six materials (DESIGN.md section 1), steady creep `C q^n`.
+/// The paper's six materials (docs/model.md section 1), steady creep `C q^n`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Preset {
     /// Ti-6Al-4V, isothermal creep at 1293 K (beta): C = 4.8e-7, n = 2.8.
@@ -15,7 +15,7 @@ pub enum Preset {
     /// Ti-6Al-4V, thermal cycling 1133-1293 K (transformation mismatch
     /// plasticity, period 191 s), cycle-averaged: C = 1.045e-5, n = 1. The law
     /// is linear only while stresses stay near the internal stress (7.4 MPa);
-    /// contact stresses exceed it, a limitation the seed shares.
+    /// contact stresses exceed it, a limitation the paper shares.
     Ti64Tmp1133To1293K,
     /// CP-Ti alpha at 1003 K: C = 1.29e-10, n = 4.3.
     CpTiAlpha1003K,
@@ -28,7 +28,7 @@ pub enum Preset {
 }
 
 impl Preset {
-    /// Every preset, in the order of DESIGN.md's table.
+    /// Every preset, in the order of the table in docs/model.md.
     pub const ALL: [Preset; 6] = [
         Preset::Ti64Creep1293K,
         Preset::Ti64Tmp1133To1293K,
@@ -89,7 +89,7 @@ impl Preset {
 /// `C = (4/3) * 5n/(4n+1) * (dV/V) / dt_cycle / sigma0` [MPa^-1 s^-1], with `n`
 /// the creep exponent of the phases, `dv_over_v` the transformation volume
 /// change, `cycle_s` the full thermal cycle period [s] and `sigma0_mpa` the
-/// internal stress [MPa] (DESIGN.md section 1).
+/// internal stress [MPa] (docs/model.md section 1).
 pub fn tmp_creep_coefficient(dv_over_v: f64, cycle_s: f64, sigma0_mpa: f64, n: f64) -> f64 {
     4.0 / 3.0 * 5.0 * n / (4.0 * n + 1.0) * dv_over_v / cycle_s / sigma0_mpa
 }
@@ -111,13 +111,13 @@ mod tests {
     }
 
     #[test]
-    fn tmp_formula_matches_the_seed_coefficient_within_one_percent() {
+    fn tmp_formula_matches_the_paper_coefficient_within_one_percent() {
         let c = tmp_creep_coefficient(0.0096, 191.0, 7.4, 2.8);
-        let (seed, n) = Preset::Ti64Tmp1133To1293K.creep_law();
+        let (paper, n) = Preset::Ti64Tmp1133To1293K.creep_law();
         assert_eq!(n, 1.0);
         assert!(
-            (c / seed - 1.0).abs() < 0.01,
-            "formula {c:e} vs seed {seed:e}"
+            (c / paper - 1.0).abs() < 0.01,
+            "formula {c:e} vs the paper's {paper:e}"
         );
         assert!((c - 1.039e-5).abs() < 0.001e-5);
     }

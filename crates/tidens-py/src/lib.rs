@@ -45,7 +45,10 @@ mod _core {
         m.add("CONTACT_MODES", modes)?;
         m.add("DEFAULT_SIZE_RATIO", tidens_solver::DEFAULT_SIZE_RATIO)?;
         // Every solver knob's default: the core's, read by the Python layer.
-        m.add("SOLVER_DEFAULTS", super::simulation::solver_defaults(m.py())?)?;
+        m.add(
+            "SOLVER_DEFAULTS",
+            super::simulation::solver_defaults(m.py())?,
+        )?;
         let elements: Vec<&str> = super::simulation::ELEMENTS
             .iter()
             .map(|(name, _)| *name)

@@ -71,9 +71,7 @@ fn element_kind(name: &str) -> PyResult<ElementKind> {
         .find(|(n, _)| *n == name)
         .map(|&(_, kind)| kind)
         .ok_or_else(|| {
-            PyValueError::new_err(format!(
-                "element = '{name}': must be one of hex8, tet10"
-            ))
+            PyValueError::new_err(format!("element = '{name}': must be one of hex8, tet10"))
         })
 }
 
@@ -287,8 +285,7 @@ impl PySimulation {
                     Some(m) => count("newton_max_iterations", m, "in [1, 1000]")?,
                     None => newton.max_iterations,
                 },
-                residual_tolerance: newton_residual_tolerance
-                    .unwrap_or(newton.residual_tolerance),
+                residual_tolerance: newton_residual_tolerance.unwrap_or(newton.residual_tolerance),
                 ..newton.clone()
             },
             contact: ContactOptions {
