@@ -393,14 +393,25 @@ pub fn evaluate_into<const NEN: usize, const NGP: usize, const NXP: usize, const
                     }
                 }
             }
+            // The deviatoric part is symmetric (the spatial tangent has the
+            // major symmetry): its upper triangle only, mirrored below.
             for a in 0..NEN {
                 for i in 0..3 {
-                    let r = (3 * a + i) * NDOF;
-                    for col in 0..NDOF {
-                        let s: f64 = (0..3).map(|j| g[a][j] * t[3 * i + j][col]).sum();
-                        tangent[r + col] += w * s;
+                    let p = 3 * a + i;
+                    let r = p * NDOF;
+                    let (g0, g1, g2) = (w * g[a][0], w * g[a][1], w * g[a][2]);
+                    let (t0, t1, t2) = (&t[3 * i], &t[3 * i + 1], &t[3 * i + 2]);
+                    for col in p..NDOF {
+                        tangent[r + col] += g0 * t0[col] + g1 * t1[col] + g2 * t2[col];
                     }
                 }
+            }
+        }
+    }
+    if let Some(tangent) = tangent.as_deref_mut() {
+        for p in 0..NDOF {
+            for q in p + 1..NDOF {
+                tangent[q * NDOF + p] = tangent[p * NDOF + q];
             }
         }
     }
