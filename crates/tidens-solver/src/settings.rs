@@ -12,8 +12,11 @@ pub struct NewtonSettings {
     pub max_iterations: usize,
     /// Converged when every residual entry (nodal force, and the piston's
     /// force balance) is below this fraction of the applied piston force
-    /// (default 1e-6). During the ramp the force is floored at 1e-3 of its
-    /// final value, so the unloaded start has an absolute tolerance.
+    /// (default 1e-4). During the ramp the force is floored at 1e-3 of its
+    /// final value, so the unloaded start has an absolute tolerance. The
+    /// default was measured against 1e-6 and 1e-7: the times to density of
+    /// the sc cell (levels 1 and 3) and of bcc (level 1) move by less than
+    /// 0.15 %, with 25 to 40 % fewer Newton iterations.
     pub residual_tolerance: f64,
     /// Start each step from the displacement extrapolated from the previous
     /// two steps (default true).
@@ -24,7 +27,7 @@ impl Default for NewtonSettings {
     fn default() -> Self {
         Self {
             max_iterations: 25,
-            residual_tolerance: 1e-6,
+            residual_tolerance: 1e-4,
             extrapolate: true,
         }
     }

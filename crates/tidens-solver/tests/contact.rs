@@ -115,7 +115,12 @@ fn identical_octants_pressed_along_an_axis_deform_mirror_symmetrically() {
 #[test]
 fn contact_force_balances_the_piston_force_at_every_step() {
     let cell = Cell::bcc(0.05, 1.0).unwrap();
-    let (scene, mut sim) = press(&cell, 1, 0.72, ContactMode::Frictionless);
+    let (scene, sim) = press(&cell, 1, 0.72, ContactMode::Frictionless);
+    // Balance holds to what Newton leaves: converge it well below the bound
+    // checked (the default leaves 1e-4 of the piston force per equation).
+    let mut settings = sim.settings().clone();
+    settings.newton.residual_tolerance = 1e-7;
+    let mut sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
     let area = scene.lengths[0] * scene.lengths[1];
     let mut steps = 0;
     let mut worst: f64 = 0.0;
