@@ -18,10 +18,12 @@ t(0.9) and t(0.95) from two ladders, by Richardson extrapolation:
   t_0 + b tau^q the same way, giving the time-discretisation error of the
   mesh ladder's tolerance, which is added as a correction.
 
-The reference is the mesh-extrapolated value plus that time correction. Its
-uncertainty is reported as the size of the last mesh and time corrections
-(the extrapolation is only as good as the asymptotic range of the ladder,
-which the observed order tells). Every run is stored in the output file as
+The reference is the mesh-extrapolated value plus that time correction.
+An extrapolation is trusted only where the observed order is plausible
+(mesh: 1 to 4, time: 0.5 to 2): convergence in contact problems is often
+not monotone (nodes meet the planes one by one), and then the finest value
+is kept and the last change is its uncertainty. The uncertainty reported is
+the sum of the mesh and time parts. Every run is stored in the output file as
 it finishes, and runs already there are not repeated, so the command can
 be stopped and resumed.
 """
@@ -97,13 +99,23 @@ def extrapolate(h: list[float], t: list[float], p: float) -> float:
     return float(t2 + (t2 - t1) * h2**p / (h1**p - h2**p))
 
 
-def ladder(xs: list[float], ts: list[float], default_order: float) -> dict[str, Any]:
-    """Observed order from the last three points (the default order when the
-    convergence is not monotone), and the extrapolated limit."""
+def ladder(xs: list[float], ts: list[float], expected: float, plausible: tuple[float, float]) -> dict[str, Any]:
+    """The limit of a ladder (xs decreasing toward 0).
+
+    With an observed order (last three points) in the ``plausible`` range,
+    the convergence is taken as asymptotic: Richardson from the last two
+    points with that order, the uncertainty being the size of the
+    correction. Otherwise (no monotone convergence, or an order far from the
+    ``expected`` one) no extrapolation is trusted: the limit is the last
+    point, and the uncertainty is the last change (or the correction with
+    the expected order, if larger)."""
     p = observed_order(xs[-3:], ts[-3:]) if len(xs) >= 3 else None
-    used = p if p is not None else default_order
-    limit = extrapolate(xs, ts, used)
-    return {"order": p, "order_used": used, "limit": limit, "correction": limit - ts[-1]}
+    if p is not None and plausible[0] <= p <= plausible[1]:
+        limit = extrapolate(xs, ts, p)
+        return {"order": p, "extrapolated": True, "limit": limit, "correction": limit - ts[-1], "uncertainty": abs(limit - ts[-1])}
+    guess = extrapolate(xs, ts, expected) - ts[-1]
+    spread = abs(ts[-1] - ts[-2]) if len(ts) >= 2 else abs(guess)
+    return {"order": p, "extrapolated": False, "limit": ts[-1], "correction": 0.0, "uncertainty": max(spread, abs(guess))}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -144,19 +156,19 @@ def main(argv: list[str] | None = None) -> None:
         for x in marks:
             k = f"{x:g}"
             tm = [r["times_s"][k] for r in mesh_runs]
-            mesh = ladder(h, tm, 2.0)
+            mesh = ladder(h, tm, 2.0, (1.0, 4.0))
             tt = [r["times_s"][k] for r in time_runs]
             # The tolerance ladder sorted by tolerance, the mesh ladder's last.
             order = sorted(range(len(tols)), key=lambda i: -tols[i])
             xs = [tols[i] for i in order]
             ys = [tt[i] for i in order]
-            tl = ladder(xs, ys, 1.0)
+            tl = ladder(xs, ys, 1.0, (0.5, 2.0))
             # Time correction of the mesh ladder's tolerance at the time level.
             at_tol = ys[xs.index(args.level_tolerance)]
             time_corr = tl["limit"] - at_tol
             ref = mesh["limit"] + time_corr
             out["times_s"][k] = ref
-            out["uncertainty_s"][k] = abs(mesh["correction"]) + abs(time_corr)
+            out["uncertainty_s"][k] = mesh["uncertainty"] + tl["uncertainty"]
             out["mesh"][k] = {"levels": levels, "times_s": tm, **mesh}
             out["time"][k] = {"level": args.time_level, "tolerances": xs, "times_s": ys, **tl, "correction_at_level_tolerance": time_corr}
         data["cases"][case] = out
@@ -167,8 +179,8 @@ def main(argv: list[str] | None = None) -> None:
         for x in marks:
             k = f"{x:g}"
             m, t = out["mesh"][k], out["time"][k]
-            po = "-" if m["order"] is None else f"{m['order']:.2f}"
-            qo = "-" if t["order"] is None else f"{t['order']:.2f}"
+            po = ("-" if m["order"] is None else f"{m['order']:.2f}") + ("" if m["extrapolated"] else " (not used)")
+            qo = ("-" if t["order"] is None else f"{t['order']:.2f}") + ("" if t["extrapolated"] else " (not used)")
             print(
                 f"| {k} | " + " | ".join(f"{v:.2f}" for v in m["times_s"]) + f" | {po} | {m['limit']:.2f} | {qo} | {t['correction_at_level_tolerance']:+.3f} | {out['times_s'][k]:.2f} | {100 * out['uncertainty_s'][k] / out['times_s'][k]:.2f} % |"
             )

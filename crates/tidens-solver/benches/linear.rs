@@ -4,32 +4,37 @@
 //! rho = 0.7 (10 MPa), at mesh levels 2, 3 and 4:
 //! - evaluation and assembly of the tangent (elements evaluated in parallel,
 //!   gathered into the equation system), in equations per second;
-//! - the numeric Cholesky factorisation (the symbolic one is reused), and
-//!   the LU factorisation of the same matrix that a non-symmetric element
-//!   (F-bar) would need, in equations per second;
+//! - the numeric Cholesky factorisation (the symbolic one is reused) with the
+//!   default nested-dissection ordering and with AMD, and the LU
+//!   factorisation of the same matrix that a non-symmetric element (F-bar)
+//!   would need, in equations per second;
 //! - one forward/backward solve with the factor, in equations per second.
+//!
+//! On the tangent of the bcc cell pressed to rho = 0.75 (15 MPa), at mesh
+//! levels 2 and 3: the numeric Cholesky factorisation with either ordering.
 
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
 use faer::sparse::linalg::solvers::{Lu, SymbolicLu};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use std::hint::black_box;
-use tidens_solver::linear::LinearSolver;
+use tidens_fem::SparseSystem;
+use tidens_solver::linear::{FillOrdering, LinearSolver};
 use tidens_solver::{
     Cell, LoadHistory, MeshOptions, Preset, Scene, Settings, Simulation, SolverError,
 };
 
-/// The sc cell at 10 MPa, advanced until its density reaches `rho`.
-fn sc_pressed_to(level: u32, rho: f64) -> Result<Simulation, SolverError> {
-    let cell = Cell::sc(0.05, 1.0)?;
+/// `cell` at `stress` [MPa], advanced until its density reaches `rho`.
+fn pressed_to(cell: &Cell, level: u32, stress: f64, rho: f64) -> Result<Simulation, SolverError> {
     let scene = Scene::from_cell(
-        &cell,
+        cell,
         &MeshOptions {
             level,
             ..MeshOptions::default()
         },
     )?;
     let mut settings = Settings::new(LoadHistory {
-        stress: 10.0,
+        stress,
         knockdown: 1.0,
         ramp_time: 1.0,
     });
@@ -40,11 +45,27 @@ fn sc_pressed_to(level: u32, rho: f64) -> Result<Simulation, SolverError> {
     Ok(sim)
 }
 
+/// The numeric Cholesky factorisation of `sys` with each ordering.
+fn cholesky_by_ordering(g: &mut BenchmarkGroup<'_, WallTime>, sys: &SparseSystem, label: &str) {
+    for (name, ordering) in [
+        ("cholesky", FillOrdering::NestedDissection),
+        ("cholesky_amd", FillOrdering::Amd),
+    ] {
+        let mut chol = LinearSolver::with_ordering(ordering);
+        chol.factorize(sys).expect("factorisation");
+        let entries = chol.factor_entries();
+        g.bench_function(format!("{name}/{label}, factor {entries}"), |b| {
+            b.iter(|| black_box(chol.factorize(sys).expect("factorisation")))
+        });
+    }
+}
+
 fn linear_algebra(c: &mut Criterion) {
     let mut g = c.benchmark_group("sc_tangent");
     g.sample_size(10);
+    let sc = Cell::sc(0.05, 1.0).expect("sc cell");
     for level in [2, 3, 4] {
-        let mut sim = sc_pressed_to(level, 0.7).expect("sc run");
+        let mut sim = pressed_to(&sc, level, 10.0, 0.7).expect("sc run");
         let sys = sim.assemble_tangent(10.0).expect("tangent").clone();
         let n = sys.dim();
         let label = format!("level {level}, {n} equations, nnz {}", sys.nnz());
@@ -52,11 +73,9 @@ fn linear_algebra(c: &mut Criterion) {
         g.bench_function(format!("evaluate_and_assemble/{label}"), |b| {
             b.iter(|| black_box(sim.assemble_tangent(10.0).expect("tangent").nnz()))
         });
+        cholesky_by_ordering(&mut g, &sys, &label);
         let mut chol = LinearSolver::default();
         chol.factorize(&sys).expect("factorisation");
-        g.bench_function(format!("cholesky/{label}"), |b| {
-            b.iter(|| black_box(chol.factorize(&sys).expect("factorisation")))
-        });
         let rhs: Vec<f64> = (0..n).map(|k| (k as f64 * 0.1).sin()).collect();
         g.bench_function(format!("solve/{label}"), |b| {
             b.iter(|| {
@@ -71,6 +90,18 @@ fn linear_algebra(c: &mut Criterion) {
         g.bench_function(format!("lu/{label}"), |b| {
             b.iter(|| black_box(Lu::try_new_with_symbolic(symbolic.clone(), mat).expect("LU")))
         });
+    }
+    g.finish();
+    let mut g = c.benchmark_group("bcc_tangent");
+    g.sample_size(10);
+    let bcc = Cell::bcc(0.05, 1.0).expect("bcc cell");
+    for level in [2, 3] {
+        let mut sim = pressed_to(&bcc, level, 15.0, 0.75).expect("bcc run");
+        let sys = sim.assemble_tangent(10.0).expect("tangent").clone();
+        let n = sys.dim();
+        g.throughput(Throughput::Elements(n as u64));
+        let label = format!("level {level}, {n} equations, nnz {}", sys.nnz());
+        cholesky_by_ordering(&mut g, &sys, &label);
     }
     g.finish();
 }

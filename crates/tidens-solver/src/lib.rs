@@ -20,6 +20,7 @@ mod line_search;
 pub mod linear;
 mod load;
 mod newton;
+mod ordering;
 mod output;
 mod scene;
 mod settings;
