@@ -38,10 +38,12 @@ class SolverSettings:
     grading
         Element-size ratio toward the contact points (1 = uniform).
     exact_volume
-        Move the surface nodes of each particle outward (the contact points
-        stay on the true surface) so that its mesh has the exact volume of
-        the spheroid; by default the surface nodes lie on the spheroid and
-        the flat facets between them leave the mesh a little short of it.
+        Move the curved-surface nodes of each particle outward by O(h^2)
+        (the contact points stay on the true surface) so that its mesh has
+        the exact volume of the spheroid, and the curve starts at the
+        packing's exact rho0 (the default). False puts the surface nodes on
+        the spheroid: the flat facets between them leave each particle a
+        little short of its volume (0.75 % at level 2).
     element
         ``hex8``: the 8-node mean-dilatation hexahedron (default); ``tet10``:
         the 10-node tetrahedron with one pressure, 6 per hexahedron of the

@@ -37,8 +37,17 @@ pub struct MeshOptions {
     /// touch without overlap. Hexahedra only: 10-node tetrahedra keep their
     /// corners on the spheroid (their curved faces make the volume exact to
     /// O(h^4)).
-    #[serde(default)]
+    ///
+    /// On by default: measured on bcc and fcc at 15 MPa, the times to 0.9
+    /// and 0.95 change about half as much from level 2 to level 3 with it
+    /// as without it (level 2 with it lies where level 3 without it lies);
+    /// on sc the two mesh families converge alike.
+    #[serde(default = "exact_volume_default")]
     pub exact_volume: bool,
+}
+
+fn exact_volume_default() -> bool {
+    true
 }
 
 impl Default for MeshOptions {
@@ -46,7 +55,7 @@ impl Default for MeshOptions {
         Self {
             level: 3,
             grading: 1.0,
-            exact_volume: false,
+            exact_volume: exact_volume_default(),
         }
     }
 }
@@ -362,7 +371,7 @@ mod tests {
         MeshOptions {
             level,
             grading,
-            exact_volume: true,
+            exact_volume: exact_volume_default(),
         }
     }
 
@@ -431,12 +440,13 @@ mod tests {
     }
 
     #[test]
-    fn exact_volume_is_off_by_default() {
-        assert!(!MeshOptions::default().exact_volume);
-        let cell = Cell::sc(0.05, 1.0).unwrap();
-        let scene = Scene::from_cell(&cell, &MeshOptions::default()).unwrap();
-        let [lx, ly, lz] = scene.lengths;
-        assert!(scene.mesh.volume() / (lx * ly * lz) < cell.rho0() * (1.0 - 1e-4));
+    fn default_meshes_start_at_the_exact_density() {
+        for cell in [Cell::sc(0.05, 1.0).unwrap(), Cell::fcc(0.05, 1.2).unwrap()] {
+            let scene = Scene::from_cell(&cell, &MeshOptions::default()).unwrap();
+            let [lx, ly, lz] = scene.lengths;
+            let rho = scene.mesh.volume() / (lx * ly * lz);
+            assert!((rho / cell.rho0() - 1.0).abs() < 1e-10, "{}: {rho}", cell.name);
+        }
     }
 
     #[test]
