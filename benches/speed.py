@@ -12,7 +12,8 @@ its peak memory (largest resident set), the steps, Newton iterations and
 factorisations, the split of the solver's time between element evaluation,
 particle contact, assembly and linear algebra, and the error of t(0.8),
 t(0.9) and t(0.95) against the converged references of
-``benches/references.json`` (made by ``benches/references.py``).
+``benches/references.json`` (made by ``benches/references.py``), with the
+reference's own uncertainty in brackets.
 
 ``--save`` writes the figures as JSON and ``--compare`` prints a ratio
 column against such a file (before/after tables from one script).
@@ -91,11 +92,19 @@ def fmt(x: float | None, spec: str = ".1f") -> str:
 
 
 def errors(name: str, result: dict[str, Any], refs: dict[str, Any]) -> list[str]:
-    ref = refs.get("cases", {}).get(name, {}).get("times_s", {})
+    """The relative error of each time against the reference, with the
+    reference's own uncertainty in brackets: an error smaller than that
+    uncertainty says only that the run lies within it."""
+    case = refs.get("cases", {}).get(name, {})
+    ref, unc = case.get("times_s", {}), case.get("uncertainty_s", {})
     cells = []
     for r in MARKS:
-        t, tr = result["times"].get(f"{r:g}"), ref.get(f"{r:g}")
-        cells.append("-" if t is None or tr is None else f"{100 * (t / tr - 1):+.2f} %")
+        k = f"{r:g}"
+        t, tr = result["times"].get(k), ref.get(k)
+        if t is None or tr is None:
+            cells.append("-")
+        else:
+            cells.append(f"{100 * (t / tr - 1):+.2f} % (±{100 * unc.get(k, 0.0) / tr:.1f} %)")
     return cells
 
 

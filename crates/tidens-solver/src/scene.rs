@@ -445,7 +445,11 @@ mod tests {
             let scene = Scene::from_cell(&cell, &MeshOptions::default()).unwrap();
             let [lx, ly, lz] = scene.lengths;
             let rho = scene.mesh.volume() / (lx * ly * lz);
-            assert!((rho / cell.rho0() - 1.0).abs() < 1e-10, "{}: {rho}", cell.name);
+            assert!(
+                (rho / cell.rho0() - 1.0).abs() < 1e-10,
+                "{}: {rho}",
+                cell.name
+            );
         }
     }
 

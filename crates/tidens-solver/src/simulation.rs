@@ -442,7 +442,8 @@ impl Simulation {
             .factor(t1)
             .powf(self.body.material().creep_n);
         let max_dp = s.eval.body.max_dp();
-        let assessment = self.control.assess(dt, rate, weight, max_dp)?;
+        let noise = s.eval.contact.max_violation() / lz;
+        let assessment = self.control.assess(dt, rate, weight, max_dp, noise)?;
         self.stats.steps += 1;
         self.stats.newton_iterations += iterations;
         self.body.commit(&s.eval.body);
