@@ -150,11 +150,7 @@ impl HexMesh {
         spec: &OctantSpec,
         shape: &OctantShape,
     ) -> Result<HexMesh, MeshError> {
-        spec.validate()?;
-        shape.validate()?;
-        let layout =
-            cubed_octant::OctantLayout::new(spec.a, spec.c, spec.divisions, spec.grading, *shape);
-        Ok(cubed_octant::build(layout).mesh)
+        Ok(octant(spec, shape)?.mesh)
     }
 
     /// Like [`HexMesh::spheroid_octant`] (same nodes, elements and boundary,
@@ -191,11 +187,7 @@ impl HexMesh {
         spec: &OctantSpec,
         shape: &OctantShape,
     ) -> Result<HexMesh, MeshError> {
-        spec.validate()?;
-        shape.validate()?;
-        let layout =
-            cubed_octant::OctantLayout::new(spec.a, spec.c, spec.divisions, spec.grading, *shape);
-        exact_volume::fit(cubed_octant::build(layout), spec.a, spec.c)
+        exact_volume::fit(octant(spec, shape)?, spec.a, spec.c)
     }
 
     /// Uniform mesh of the box [0, Lx] x [0, Ly] x [0, Lz] \[mm\] with
@@ -238,4 +230,14 @@ pub fn divisions_for_level(level: u32) -> Result<usize, MeshError> {
         return Err(MeshError::Level(level));
     }
     Ok((4.0 * 2f64.powf(f64::from(level - 1) / 2.0)).round() as usize)
+}
+
+/// The cubed-octant mesh of a checked spec and shape, surface nodes on the
+/// spheroid.
+fn octant(spec: &OctantSpec, shape: &OctantShape) -> Result<cubed_octant::OctantMesh, MeshError> {
+    spec.validate()?;
+    shape.validate()?;
+    let layout =
+        cubed_octant::OctantLayout::new(spec.a, spec.c, spec.divisions, spec.grading, *shape);
+    Ok(cubed_octant::build(layout))
 }
