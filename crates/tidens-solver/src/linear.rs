@@ -213,7 +213,8 @@ impl LinearSolver {
             .as_ref()
             .ok_or_else(|| SolverError::Linear("no symbolic factorisation".into()))?;
         let par = Par::Seq;
-        // Indefinite tangents come in runs (large steps late in a run): a
+        // Indefinite tangents come in runs (the iterates of a hard step, with
+        // large plastic increments): a
         // failed Cholesky costs up to a whole factorisation, so after an
         // indefinite one the next goes straight to LBL^T, Cholesky being
         // tried again every LLT_RETRY-th time (measured on bcc and fcc at
