@@ -214,11 +214,11 @@ impl LinearSolver {
             .ok_or_else(|| SolverError::Linear("no symbolic factorisation".into()))?;
         let par = Par::Seq;
         // Indefinite tangents come in runs (the iterates of a hard step, with
-        // large plastic increments): a
-        // failed Cholesky costs up to a whole factorisation, so after an
-        // indefinite one the next goes straight to LBL^T, Cholesky being
-        // tried again every LLT_RETRY-th time (measured on bcc and fcc at
-        // level 2: 5 % less time in linear algebra, same results).
+        // large plastic increments): a failed Cholesky costs up to a whole
+        // factorisation, so after an indefinite one the next goes straight
+        // to LBL^T, Cholesky being tried again every LLT_RETRY-th time
+        // (measured on bcc and fcc at level 2: 5 % less time in linear
+        // algebra, same results).
         let try_llt = self.indefinite_run.is_multiple_of(LLT_RETRY);
         let llt_ok = try_llt && {
             let mut scratch = buffer(
