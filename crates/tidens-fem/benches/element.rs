@@ -27,7 +27,7 @@ fn octant(divisions: usize) -> OctantSpec {
     }
 }
 
-/// A smooth displacement field over `nodes` [mm].
+/// A smooth displacement field over `nodes` \[mm\].
 fn displacement(nodes: &[[f64; 3]]) -> Vec<f64> {
     nodes
         .iter()

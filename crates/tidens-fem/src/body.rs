@@ -230,7 +230,7 @@ impl Body {
         &self.states
     }
 
-    /// Reference volume [mm^3].
+    /// Reference volume \[mm^3\].
     pub fn reference_volume(&self) -> f64 {
         match &self.geometry {
             Geometry::None => 0.0,
@@ -407,7 +407,7 @@ impl BodyEvaluation {
         f
     }
 
-    /// Current volume of the body [mm^3].
+    /// Current volume of the body \[mm^3\].
     pub fn volume(&self) -> f64 {
         self.summaries.iter().map(|o| o.volume).sum()
     }

@@ -46,19 +46,19 @@ use tidens_material::{Material, PointState};
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeanDilatationGeometry<const NEN: usize, const NGP: usize, const NXP: usize> {
     /// Gradients of the shape functions with respect to the reference
-    /// coordinates at the material points, `grad[gp][a][J]` [1/mm].
+    /// coordinates at the material points, `grad[gp][a]\[J\]` [1/mm].
     pub grad: [[[f64; 3]; NEN]; NGP],
-    /// Deviatoric weight times reference Jacobian determinant [mm^3].
+    /// Deviatoric weight times reference Jacobian determinant \[mm^3\].
     pub weight: [f64; NGP],
     /// Volume-rule weight at the material points times reference Jacobian
-    /// determinant [mm^3] (equal to `weight` for the hexahedron).
+    /// determinant \[mm^3\] (equal to `weight` for the hexahedron).
     pub volume_weight: [f64; NGP],
     /// Shape-function gradients at the extra volume points [1/mm].
     pub extra_grad: [[[f64; 3]; NEN]; NXP],
     /// Volume-rule weight at the extra points times reference Jacobian
-    /// determinant [mm^3].
+    /// determinant \[mm^3\].
     pub extra_weight: [f64; NXP],
-    /// Reference volume [mm^3] (exact for the element's geometry).
+    /// Reference volume \[mm^3\] (exact for the element's geometry).
     pub volume: f64,
 }
 
@@ -175,7 +175,7 @@ pub struct MeanDilatationOutput<const NDOF: usize, const NGP: usize> {
     pub tangent: Vec<f64>,
     /// Material states at the end of the step.
     pub states: [PointState; NGP],
-    /// Current volume [mm^3].
+    /// Current volume \[mm^3\].
     pub volume: f64,
     /// Largest equivalent plastic strain increment over the material points.
     pub max_dp: f64,
@@ -268,7 +268,7 @@ fn add_volume_curvature<const NEN: usize, const NDOF: usize>(
 /// go to the caller's buffers, see [`evaluate_into`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ElementSummary {
-    /// Current volume [mm^3].
+    /// Current volume \[mm^3\].
     pub volume: f64,
     /// Largest equivalent plastic strain increment over the material points.
     pub max_dp: f64,

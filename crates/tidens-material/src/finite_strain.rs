@@ -36,20 +36,20 @@ use nalgebra::{Matrix3, SMatrix, Vector3};
 
 /// Spatial tangent `a` as a 9x9 matrix, row `3 i + j` for `g_ij`, column
 /// `3 k + l` for `l_kl`: the linearised virtual work is `g : a : l` per unit
-/// reference volume [MPa].
+/// reference volume \[MPa\].
 pub type SpatialTangent = SMatrix<f64, 9, 9>;
 
 /// Deviatoric response of one material point over one time step.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DeviatoricResponse {
-    /// Deviatoric Kirchhoff stress at the end of the step [MPa].
+    /// Deviatoric Kirchhoff stress at the end of the step \[MPa\].
     pub tau_dev: Matrix3<f64>,
     /// Consistent spatial tangent of the deviatoric response (see module
     /// docs), when requested.
     pub tangent: Option<SpatialTangent>,
     /// State at the end of the step.
     pub state: PointState,
-    /// von Mises (Kirchhoff) stress at the end of the step [MPa].
+    /// von Mises (Kirchhoff) stress at the end of the step \[MPa\].
     pub q: f64,
     /// Equivalent plastic strain increment over the step [-].
     pub dp: f64,
@@ -203,7 +203,7 @@ fn spatial_tangent(
 impl Material {
     /// Integrates the deviatoric response of one material point from the state
     /// `state` at the start of the step to the deformation gradient `f` at its
-    /// end, over the time step `dt` [s].
+    /// end, over the time step `dt` \[s\].
     pub fn update_deviatoric(
         &self,
         f: &Matrix3<f64>,

@@ -3,13 +3,13 @@ use serde::{Deserialize, Serialize};
 
 /// Hencky elasticity + J2 Norton viscoplasticity, `eps_dot = C q^n`.
 ///
-/// Units: `young` [MPa], `creep_c` [MPa^-n s^-1], `creep_n` [-]. The equivalent
+/// Units: `young` \[MPa\], `creep_c` [MPa^-n s^-1], `creep_n` [-]. The equivalent
 /// plastic strain rate is `C q^n` with `q` the von Mises (Kirchhoff) stress;
 /// there is no yield stress, so this is the "rate-dependent perfectly plastic"
 /// form of the steady creep law `sigma = (eps_dot / C)^(1/n)`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Material {
-    /// Young's modulus E [MPa].
+    /// Young's modulus E \[MPa\].
     pub young: f64,
     /// Poisson's ratio nu [-].
     pub poisson: f64,
@@ -63,23 +63,23 @@ impl Material {
         })
     }
 
-    /// Shear modulus G = E / (2 (1 + nu)) [MPa].
+    /// Shear modulus G = E / (2 (1 + nu)) \[MPa\].
     pub fn shear_modulus(&self) -> f64 {
         self.young / (2.0 * (1.0 + self.poisson))
     }
 
-    /// Bulk modulus K = E / (3 (1 - 2 nu)) [MPa].
+    /// Bulk modulus K = E / (3 (1 - 2 nu)) \[MPa\].
     pub fn bulk_modulus(&self) -> f64 {
         self.young / (3.0 * (1.0 - 2.0 * self.poisson))
     }
 
-    /// Constrained (P-wave) modulus M = K + 4 G / 3 [MPa]: the uniaxial-strain
+    /// Constrained (P-wave) modulus M = K + 4 G / 3 \[MPa\]: the uniaxial-strain
     /// stiffness of the elastic solid.
     pub fn constrained_modulus(&self) -> f64 {
         self.bulk_modulus() + 4.0 / 3.0 * self.shear_modulus()
     }
 
-    /// Steady creep rate at von Mises stress `q` [MPa]: `C q^n` [1/s].
+    /// Steady creep rate at von Mises stress `q` \[MPa\]: `C q^n` \[1/s\].
     pub fn creep_rate(&self, q: f64) -> f64 {
         self.creep_c * q.powf(self.creep_n)
     }

@@ -1,7 +1,7 @@
 use crate::error::MaterialError;
 use crate::params::Material;
 
-/// Default Young's modulus [MPa]: the value implied by the paper's creep
+/// Default Young's modulus \[MPa\]: the value implied by the paper's creep
 /// tolerance (2.3e-6 for 0.1 MPa), plausible for Ti-6Al-4V near 1293 K.
 pub const DEFAULT_YOUNG_MPA: f64 = 4.35e4;
 /// Default Poisson's ratio.
@@ -88,8 +88,8 @@ impl Preset {
 /// Norton coefficient of transformation mismatch plasticity (linear in stress):
 /// `C = (4/3) * 5n/(4n+1) * (dV/V) / dt_cycle / sigma0` [MPa^-1 s^-1], with `n`
 /// the creep exponent of the phases, `dv_over_v` the transformation volume
-/// change, `cycle_s` the full thermal cycle period [s] and `sigma0_mpa` the
-/// internal stress [MPa] (docs/model.md section 1).
+/// change, `cycle_s` the full thermal cycle period \[s\] and `sigma0_mpa` the
+/// internal stress \[MPa\] (docs/model.md section 1).
 pub fn tmp_creep_coefficient(dv_over_v: f64, cycle_s: f64, sigma0_mpa: f64, n: f64) -> f64 {
     4.0 / 3.0 * 5.0 * n / (4.0 * n + 1.0) * dv_over_v / cycle_s / sigma0_mpa
 }

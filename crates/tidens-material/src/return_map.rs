@@ -3,7 +3,7 @@ use crate::params::Material;
 /// Result of the scalar backward-Euler return of the Norton law.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ReturnMap {
-    /// von Mises stress at the end of the step [MPa].
+    /// von Mises stress at the end of the step \[MPa\].
     pub q: f64,
     /// Equivalent plastic strain increment over the step [-].
     pub dp: f64,

@@ -130,7 +130,7 @@ pub fn scaled_det(j: &[[f64; 3]; 3]) -> f64 {
     if norms > 0.0 { det3(j) / norms } else { 0.0 }
 }
 
-/// Area vector (outward normal times area) [mm^2] of the bilinear quad through
+/// Area vector (outward normal times area) \[mm^2\] of the bilinear quad through
 /// `p` (nodes in right-hand order): half the cross product of its diagonals,
 /// which is exact for a bilinear (possibly warped) quad.
 pub fn quad_area_vector(p: &[[f64; 3]; 4]) -> [f64; 3] {
@@ -140,7 +140,7 @@ pub fn quad_area_vector(p: &[[f64; 3]; 4]) -> [f64; 3] {
 }
 
 /// Flux integral of the position field, integral over the bilinear quad of x . n dA
-/// [mm^3], for nodes `p` in right-hand order. Exact (2x2 Gauss on a polynomial of
+/// \[mm^3\], for nodes `p` in right-hand order. Exact (2x2 Gauss on a polynomial of
 /// degree 2 per direction).
 pub fn quad_position_flux(p: &[[f64; 3]; 4]) -> f64 {
     let mut flux = 0.0;

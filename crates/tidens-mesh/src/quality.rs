@@ -11,14 +11,14 @@ impl HexMesh {
         self.elements[e].map(|n| self.nodes[n])
     }
 
-    /// Volume [mm^3] of the trilinear element `e` (2x2x2 Gauss rule, exact for
+    /// Volume \[mm^3\] of the trilinear element `e` (2x2x2 Gauss rule, exact for
     /// a trilinear map). Panics if `e` is out of range.
     pub fn element_volume(&self, e: usize) -> f64 {
         let map = TrilinearMap::new(&self.element_coordinates(e));
         gauss_points().iter().map(|&g| det3(&map.jacobian(g))).sum()
     }
 
-    /// Total volume [mm^3] of the trilinear elements.
+    /// Total volume \[mm^3\] of the trilinear elements.
     pub fn volume(&self) -> f64 {
         (0..self.elements.len())
             .map(|e| self.element_volume(e))

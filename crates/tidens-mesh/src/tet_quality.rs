@@ -12,7 +12,7 @@ impl TetMesh {
         self.elements[e].map(|n| self.nodes[n])
     }
 
-    /// Volume [mm^3] of the quadratic element `e`: `det J` is a cubic in the
+    /// Volume \[mm^3\] of the quadratic element `e`: `det J` is a cubic in the
     /// reference coordinates and the 10-point rule
     /// [`crate::tet10::volume_rule`] is exact to degree 3. Panics if `e` is
     /// out of range.
@@ -24,7 +24,7 @@ impl TetMesh {
             .sum()
     }
 
-    /// Total volume [mm^3] of the quadratic elements.
+    /// Total volume \[mm^3\] of the quadratic elements.
     pub fn volume(&self) -> f64 {
         (0..self.elements.len())
             .map(|e| self.element_volume(e))

@@ -122,7 +122,7 @@ fn mirrored_nodes(nodes: &[[f64; 3]], flip: [bool; 3]) -> Vec<[f64; 3]> {
         .collect()
 }
 
-/// Node coordinates shifted by `offset` [mm].
+/// Node coordinates shifted by `offset` \[mm\].
 fn translated_nodes(nodes: &[[f64; 3]], offset: [f64; 3]) -> Vec<[f64; 3]> {
     nodes
         .iter()

@@ -435,8 +435,9 @@ impl PySimulation {
     }
 
     /// Run totals: steps, newton_iterations, rejected_steps, failed_attempts,
-    /// llt_factorizations, lblt_factorizations (counts), and the wall times
-    /// evaluation_seconds, assembly_seconds, linear_seconds [s].
+    /// llt_factorizations, lblt_factorizations, evaluations,
+    /// tangent_evaluations (counts), and the wall times evaluation_seconds,
+    /// contact_seconds, assembly_seconds, linear_seconds [s].
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let stats = self.progress().stats;
         stats_dict(py, &stats)

@@ -24,7 +24,7 @@ use tidens_solver::{
     Cell, LoadHistory, MeshOptions, Preset, Scene, Settings, Simulation, SolverError,
 };
 
-/// `cell` at `stress` [MPa], advanced until its density reaches `rho`.
+/// `cell` at `stress` \[MPa\], advanced until its density reaches `rho`.
 fn pressed_to(cell: &Cell, level: u32, stress: f64, rho: f64) -> Result<Simulation, SolverError> {
     let scene = Scene::from_cell(
         cell,

@@ -12,14 +12,14 @@ use std::f64::consts::PI;
 pub struct Octant {
     /// For each axis, whether the centre sits at the high end (L_i) of the box.
     pub corner: [bool; 3],
-    /// Semi-axis along x and y [mm].
+    /// Semi-axis along x and y \[mm\].
     pub a: f64,
-    /// Semi-axis along z [mm].
+    /// Semi-axis along z \[mm\].
     pub c: f64,
 }
 
 impl Octant {
-    /// Centre of the spheroid in a box of edge lengths `lengths` [mm].
+    /// Centre of the spheroid in a box of edge lengths `lengths` \[mm\].
     pub fn centre(&self, lengths: [f64; 3]) -> [f64; 3] {
         [0, 1, 2].map(|i| if self.corner[i] { lengths[i] } else { 0.0 })
     }
@@ -42,7 +42,7 @@ impl Octant {
 pub struct Cell {
     /// Short name, e.g. "sc".
     pub name: String,
-    /// Box edge lengths Lx, Ly, Lz [mm].
+    /// Box edge lengths Lx, Ly, Lz \[mm\].
     pub lengths: [f64; 3],
     /// The particle pieces.
     pub octants: Vec<Octant>,
@@ -50,7 +50,7 @@ pub struct Cell {
 
 /// Allowed range of the spheroid aspect ratio c/a.
 pub const ASPECT_RANGE: (f64, f64) = (0.2, 5.0);
-/// Allowed range of the particle radius [mm].
+/// Allowed range of the particle radius \[mm\].
 pub const RADIUS_RANGE: (f64, f64) = (1e-6, 1e3);
 /// Relative slack allowed when an octant must fit its box or stay outside
 /// another particle (level function, about twice the relative distance), so
@@ -217,7 +217,7 @@ impl Cell {
         v / (self.lengths[0] * self.lengths[1] * self.lengths[2])
     }
 
-    /// The largest semi-axis of any particle [mm] (the R of tolerances).
+    /// The largest semi-axis of any particle \[mm\] (the R of tolerances).
     pub fn largest_radius(&self) -> f64 {
         self.octants
             .iter()

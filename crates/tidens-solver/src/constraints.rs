@@ -34,7 +34,7 @@ enum Rule {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Constraints {
     lengths: [f64; 3],
-    /// Reference coordinate of each dof's node along the dof's axis [mm].
+    /// Reference coordinate of each dof's node along the dof's axis \[mm\].
     x0: Vec<f64>,
     rules: Vec<Rule>,
     /// For unilateral dofs: `Some(high)` while in contact with that plane.
@@ -66,7 +66,7 @@ const MAX_FLIPS: u8 = 4;
 impl Constraints {
     /// Classifies the dofs of a mesh with node coordinates `nodes` and
     /// boundary faces `faces` (node lists with their kind) in the box
-    /// `lengths` [mm]. Nodes start in contact where they touch a plane (gap
+    /// `lengths` \[mm\]. Nodes start in contact where they touch a plane (gap
     /// below `1e-9` of the box size). With `tied_planes`, nodes in contact
     /// with a plane are also tied to it tangentially (a sensitivity option).
     pub fn new<'a>(
@@ -159,7 +159,7 @@ impl Constraints {
         self.rules.len()
     }
 
-    /// Position of the plane normal to `axis` at its `high` or low end [mm].
+    /// Position of the plane normal to `axis` at its `high` or low end \[mm\].
     pub fn plane_position(&self, axis: usize, high: bool, piston: f64) -> f64 {
         match (high, axis) {
             (false, _) => 0.0,
@@ -230,7 +230,7 @@ impl Constraints {
         }
     }
 
-    /// Penetration of a free unilateral dof into a plane it may touch [mm]
+    /// Penetration of a free unilateral dof into a plane it may touch \[mm\]
     /// (positive when inside the plane), with that plane.
     fn penetration(&self, d: usize, u: &[f64], piston: f64) -> Option<(f64, bool)> {
         let Rule::Unilateral { low, high } = self.rules[d] else {
@@ -251,7 +251,7 @@ impl Constraints {
         best
     }
 
-    /// Largest penetration of any free surface dof into a plane [mm].
+    /// Largest penetration of any free surface dof into a plane \[mm\].
     pub fn max_penetration(&self, u: &[f64], piston: f64) -> f64 {
         self.unilateral
             .iter()
@@ -261,11 +261,11 @@ impl Constraints {
     }
 
     /// Updates the active set from the current state: free dofs that have
-    /// penetrated a plane by more than `gap_tol` [mm] come into contact (they
+    /// penetrated a plane by more than `gap_tol` \[mm\] come into contact (they
     /// are left where they are: [`Constraints::offsets`] says how far they are
     /// off their plane, for the next linear solve to move them onto it), dofs
     /// in contact whose reaction has become tensile by
-    /// more than `force_tol` [N] are released. `f_int` is the internal force of
+    /// more than `force_tol` \[N\] are released. `f_int` is the internal force of
     /// the body; on a held dof it is the force the plane exerts. Returns the
     /// number of changes.
     pub fn update(
@@ -313,7 +313,7 @@ impl Constraints {
     }
 
     /// Held dofs that are off their plane, with the displacement that puts
-    /// them on it [mm] (dofs that have just come into contact).
+    /// them on it \[mm\] (dofs that have just come into contact).
     pub fn offsets(&self, u: &[f64], piston: f64) -> Vec<(usize, f64)> {
         self.unilateral
             .iter()

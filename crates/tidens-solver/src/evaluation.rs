@@ -11,7 +11,7 @@ use tidens_fem::BodyEvaluation;
 pub struct Evaluation {
     pub body: BodyEvaluation,
     pub contact: ContactEvaluation,
-    /// Internal force of the body plus the contact forces [N].
+    /// Internal force of the body plus the contact forces \[N\].
     pub f_int: Vec<f64>,
 }
 
@@ -35,7 +35,7 @@ impl Simulation {
     }
 
     /// Elements and particle contact at displacement `u` after a step `dt`
-    /// [s], with tangents if asked. The time taken is booked into the run's
+    /// \[s\], with tangents if asked. The time taken is booked into the run's
     /// totals.
     pub(crate) fn evaluate(
         &mut self,

@@ -10,7 +10,7 @@ pub struct Trial<T> {
     pub step: f64,
     /// Squared Euclidean norm of the residual there.
     pub norm_sq: f64,
-    /// Largest residual entry there (the convergence measure) [N].
+    /// Largest residual entry there (the convergence measure) \[N\].
     pub norm: f64,
     /// Whatever the caller computed there (displacements, evaluation).
     pub point: T,

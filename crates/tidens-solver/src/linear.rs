@@ -6,8 +6,10 @@
 //! matrix is not numerically positive definite (which the consistent tangent
 //! of a large viscoplastic step may be), the same symbolic structure serves a
 //! Bunch-Kaufman LBL^T factorisation, which handles indefinite symmetric
-//! matrices. Sequential kernels keep the result identical for any thread
-//! count.
+//! matrices; indefinite tangents come in runs, so after a failed Cholesky
+//! the next three factorisations use LBL^T directly (exact on positive-definite
+//! matrices too). Sequential kernels keep the result identical for any
+//! thread count.
 //!
 //! The fill-reducing ordering is nested dissection (METIS on the graph of
 //! the nodes, see `ordering`), not faer's AMD: on these 3D meshes it halves
@@ -15,7 +17,7 @@
 //! tangent of each cell pressed to rho = 0.75 (sc: 0.7) at 15 MPa, one core,
 //! median CPU time, AMD -> nested dissection:
 //!
-//! | cell | level | equations | factor entries [10^6] | LL^T [ms] | change |
+//! | cell | level | equations | factor entries (10^6) | LL^T (ms) | change |
 //! |---|---|---|---|---|---|
 //! | sc  | 1 |   742 |  0.12 -> 0.11 |   0.90 -> 0.95 |  +6 % |
 //! | bcc | 1 |  1483 |  0.28 -> 0.29 |   2.46 -> 2.81 | +14 % |
@@ -191,7 +193,9 @@ impl LinearSolver {
         self.values = Vec::new();
     }
 
-    /// Factorises `A` (its lower triangle is read).
+    /// Factorises `A` (its lower triangle is read): Cholesky, or LBL^T when
+    /// Cholesky fails; after a failed Cholesky the next three factorisations
+    /// use LBL^T directly.
     pub fn factorize(&mut self, sys: &SparseSystem) -> Result<Factorization, SolverError> {
         self.numeric = Numeric::None;
         let n = sys.dim();

@@ -7,16 +7,16 @@ use serde::{Deserialize, Serialize};
 /// multiplies the stress acting on the cell (docs/model.md section 1).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LoadHistory {
-    /// Applied (nominal) stress in the hold [MPa].
+    /// Applied (nominal) stress in the hold \[MPa\].
     pub stress: f64,
     /// Knock-down factor f for die-wall friction [-].
     pub knockdown: f64,
-    /// Duration of the linear ramp [s]; 0 applies the full load at once.
+    /// Duration of the linear ramp \[s\]; 0 applies the full load at once.
     pub ramp_time: f64,
 }
 
 impl LoadHistory {
-    /// Applied nominal stress sigma(t) [MPa].
+    /// Applied nominal stress sigma(t) \[MPa\].
     pub fn applied_stress(&self, t: f64) -> f64 {
         if self.ramp_time > 0.0 && t < self.ramp_time {
             self.stress * (t / self.ramp_time).max(0.0)
@@ -25,7 +25,7 @@ impl LoadHistory {
         }
     }
 
-    /// Stress acting on the cell, f sigma(t) [MPa].
+    /// Stress acting on the cell, f sigma(t) \[MPa\].
     pub fn cell_stress(&self, t: f64) -> f64 {
         self.knockdown * self.applied_stress(t)
     }

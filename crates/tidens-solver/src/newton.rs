@@ -61,7 +61,7 @@ pub(crate) struct ContactLink {
 pub(crate) struct FactorKey {
     map: Vec<usize>,
     links: Vec<ContactLink>,
-    /// The time step of the tangent [s].
+    /// The time step of the tangent \[s\].
     dt: f64,
 }
 
@@ -95,7 +95,7 @@ struct TrialPoint {
 
 impl Simulation {
     /// Global residual: internal forces gathered into equations, plus the
-    /// piston's load term `force` [N].
+    /// piston's load term `force` \[N\].
     fn residual(&self, f_int: &[f64], map: &[usize], force: f64) -> Vec<f64> {
         let n = self.constraints.dof_count();
         let mut r = vec![0.0; n + 1];
@@ -108,7 +108,7 @@ impl Simulation {
         r
     }
 
-    /// The first guess of a step of `dt` [s]: the displacement extrapolated
+    /// The first guess of a step of `dt` \[s\]: the displacement extrapolated
     /// from the last two steps. On creep flow it is far closer to the
     /// solution than the last state (even where stiff elasticity makes its
     /// residual larger).

@@ -10,15 +10,15 @@ use tidens_fem::ElementFields;
 /// One converged step of the densification curve.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CurvePoint {
-    /// Time [s].
+    /// Time \[s\].
     pub time: f64,
     /// Relative density: particle volume over current cell volume.
     pub rel_density: f64,
-    /// Piston displacement U [mm] (negative in compression).
+    /// Piston displacement U \[mm\] (negative in compression).
     pub piston_displacement: f64,
-    /// Applied nominal stress sigma(t) [MPa].
+    /// Applied nominal stress sigma(t) \[MPa\].
     pub applied_stress: f64,
-    /// Stress acting on the cell, f sigma(t) [MPa].
+    /// Stress acting on the cell, f sigma(t) \[MPa\].
     pub cell_stress: f64,
     /// Step number (0 for the initial state).
     pub step: usize,
@@ -26,13 +26,13 @@ pub struct CurvePoint {
     pub newton_iterations: usize,
     /// Newton iterations since the start.
     pub newton_total: usize,
-    /// Time step [s].
+    /// Time step \[s\].
     pub dt: f64,
     /// Largest equivalent plastic strain increment at a Gauss point.
     pub max_strain_increment: f64,
-    /// Current particle volume [mm^3].
+    /// Current particle volume \[mm^3\].
     pub particle_volume: f64,
-    /// Estimated error of `time` from the time discretisation [s]: the sum of
+    /// Estimated error of `time` from the time discretisation \[s\]: the sum of
     /// the per-step backward-Euler errors (positive when `time` is late).
     pub time_error: f64,
     /// Surface dofs in contact with a rigid plane.
@@ -41,7 +41,7 @@ pub struct CurvePoint {
     /// counts its slave nodes that carry pressure; tied: nodes tied).
     pub particle_contacts: usize,
     /// Largest penetration of a surface node into a rigid plane or into
-    /// another particle [mm].
+    /// another particle \[mm\].
     pub max_penetration: f64,
 }
 
@@ -56,13 +56,13 @@ pub enum Status {
 /// Node and element fields of the last converged state, for output.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Fields {
-    /// Current node coordinates [mm].
+    /// Current node coordinates \[mm\].
     pub points: Vec<[f64; 3]>,
-    /// Node displacements [mm].
+    /// Node displacements \[mm\].
     pub displacement: Vec<[f64; 3]>,
-    /// Force exerted by the rigid planes on each node [N].
+    /// Force exerted by the rigid planes on each node \[N\].
     pub contact_force: Vec<[f64; 3]>,
-    /// Particle-particle contact pressure at each node [MPa] (0 where none).
+    /// Particle-particle contact pressure at each node \[MPa\] (0 where none).
     pub contact_pressure: Vec<f64>,
     /// Hexahedra (VTK order).
     pub cells: Vec<[usize; 8]>,
@@ -86,15 +86,15 @@ pub struct RunStats {
     /// tangents.
     pub evaluations: usize,
     pub tangent_evaluations: usize,
-    /// Wall time in element evaluations (residual and tangent) [s].
+    /// Wall time in element evaluations (residual and tangent) \[s\].
     pub evaluation_seconds: f64,
     /// Wall time in particle contact: pairing nodes with facets (the parry
-    /// search) and evaluating the contact terms [s].
+    /// search) and evaluating the contact terms \[s\].
     pub contact_seconds: f64,
     /// Wall time gathering element and contact tangents into the sparse
-    /// system [s].
+    /// system \[s\].
     pub assembly_seconds: f64,
-    /// Wall time in sparse factorisations and solves [s].
+    /// Wall time in sparse factorisations and solves \[s\].
     pub linear_seconds: f64,
     /// Times the sparsity pattern grew for new particle contacts.
     pub pattern_rebuilds: usize,

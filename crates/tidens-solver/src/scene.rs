@@ -92,7 +92,7 @@ pub struct Scene {
     /// Exact initial relative density of the geometry (not of the mesh), if known.
     pub rho0_exact: Option<f64>,
     /// Length scale R of tolerances: the largest particle semi-axis, or the
-    /// largest box edge for blocks [mm].
+    /// largest box edge for blocks \[mm\].
     pub radius: f64,
     /// The cell the scene was meshed from (none for the blocks).
     pub cell: Option<Cell>,
@@ -243,7 +243,7 @@ impl Scene {
         }
     }
 
-    /// Node coordinates of the body mesh [mm].
+    /// Node coordinates of the body mesh \[mm\].
     pub fn nodes(&self) -> &[[f64; 3]] {
         match &self.tet_mesh {
             Some(t) => &t.nodes,

@@ -67,7 +67,7 @@ pub struct Settings {
     pub load: LoadHistory,
     /// Stop when the relative density reaches this value.
     pub until_density: Option<f64>,
-    /// Stop at this time [s].
+    /// Stop at this time \[s\].
     pub until_time: Option<f64>,
     /// Time-integration accuracy: the target relative error of the times
     /// t(rho) from the backward-Euler steps (default 0.01). Each step's error
@@ -80,16 +80,16 @@ pub struct Settings {
     /// Largest equivalent plastic strain increment allowed at any Gauss point
     /// in one step (default 0.2): a robustness limit for Newton.
     pub max_strain_increment: f64,
-    /// First time step [s]; by default 1/50 of the ramp, and at most 1e-4 of
+    /// First time step \[s\]; by default 1/50 of the ramp, and at most 1e-4 of
     /// the time for unit creep strain at the applied stress.
     pub dt_initial: Option<f64>,
-    /// Largest time step [s] (default unbounded).
+    /// Largest time step \[s\] (default unbounded).
     pub dt_max: f64,
-    /// Smallest time step [s] before giving up (default 1e-12 of the initial).
+    /// Smallest time step \[s\] before giving up (default 1e-12 of the initial).
     pub dt_min: Option<f64>,
     /// Step limit (default 100000).
     pub max_steps: usize,
-    /// Times at which a step must end (e.g. snapshot times) [s].
+    /// Times at which a step must end (e.g. snapshot times) \[s\].
     pub time_targets: Vec<f64>,
     pub newton: NewtonSettings,
     pub contact: ContactOptions,

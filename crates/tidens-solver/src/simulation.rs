@@ -19,11 +19,11 @@ use tidens_material::Material;
 /// The last accepted step, for the predictor of the next one.
 #[derive(Clone, Debug)]
 pub(crate) struct PreviousStep {
-    /// Displacement at its start [mm].
+    /// Displacement at its start \[mm\].
     pub u: Vec<f64>,
-    /// Piston displacement at its start [mm].
+    /// Piston displacement at its start \[mm\].
     pub piston: f64,
-    /// Its length [s].
+    /// Its length \[s\].
     pub dt: f64,
 }
 
@@ -31,13 +31,13 @@ pub(crate) struct PreviousStep {
 /// returns to.
 #[derive(Clone, Debug)]
 pub(crate) struct ConvergedState {
-    /// Time [s].
+    /// Time \[s\].
     pub time: f64,
-    /// Node displacements [mm].
+    /// Node displacements \[mm\].
     pub u: Vec<f64>,
-    /// Piston displacement [mm].
+    /// Piston displacement \[mm\].
     pub piston: f64,
-    /// Internal force (body and contact) [N]; on a held dof, the force the
+    /// Internal force (body and contact) \[N\]; on a held dof, the force the
     /// plane exerts.
     pub f_int: Vec<f64>,
     /// Element output fields.
@@ -65,7 +65,7 @@ pub struct Simulation {
     /// What the current factor of the tangent was computed for.
     pub(crate) factor: Option<FactorKey>,
     pub(crate) settings: Settings,
-    /// Piston force at full load [N].
+    /// Piston force at full load \[N\].
     pub(crate) full_force: f64,
     pub(crate) control: StepController,
     pub(crate) state: ConvergedState,
@@ -74,7 +74,7 @@ pub struct Simulation {
     pub(crate) status: Status,
     /// Contact between particles (scenes with more than one particle).
     pub(crate) contact: Option<ParticleContact>,
-    /// Largest particle-contact penetration accepted in a step [mm].
+    /// Largest particle-contact penetration accepted in a step \[mm\].
     pub(crate) penetration_tol: f64,
 }
 
@@ -235,7 +235,7 @@ impl Simulation {
 
     /// Per particle: the total force the other particles exert on it through
     /// contact, and the total force the rigid planes exert on it, at the last
-    /// converged step [N]. For each particle the two balance (to the Newton
+    /// converged step \[N\]. For each particle the two balance (to the Newton
     /// tolerance); the plane forces include the piston's.
     pub fn particle_forces(&self, scene: &Scene) -> Vec<([f64; 3], [f64; 3])> {
         let owner = |node: usize| {
@@ -276,7 +276,7 @@ impl Simulation {
             + 1
     }
 
-    /// Box edge lengths [mm].
+    /// Box edge lengths \[mm\].
     pub fn lengths(&self) -> [f64; 3] {
         self.lengths
     }
@@ -345,7 +345,7 @@ impl Simulation {
         dt
     }
 
-    /// Densification rate over the last step [1/s].
+    /// Densification rate over the last step \[1/s\].
     fn density_rate(&self) -> Option<f64> {
         let n = self.curve.len();
         if n < 2 {
@@ -495,7 +495,7 @@ impl Simulation {
         }
     }
 
-    /// The consistent tangent at the current state for a step `dt` [s]: the
+    /// The consistent tangent at the current state for a step `dt` \[s\]: the
     /// symmetric system Newton factorises (for diagnostics and benchmarks).
     pub fn assemble_tangent(&mut self, dt: f64) -> Result<&SparseSystem, SolverError> {
         let u = self.state.u.clone();

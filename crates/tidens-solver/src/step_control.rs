@@ -41,7 +41,7 @@ const NOISE_FACTOR: f64 = 10.0;
 /// One accepted step's contribution to the windowed rate trend.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct RateSample {
-    /// Step [s].
+    /// Step \[s\].
     dt: f64,
     /// Weighted |change of ln rate| over the step.
     change: f64,
@@ -50,9 +50,9 @@ struct RateSample {
 /// What the controller makes of a converged step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StepAssessment {
-    /// Step [s].
+    /// Step \[s\].
     pub dt: f64,
-    /// Piston log-strain rate over the step [1/s].
+    /// Piston log-strain rate over the step \[1/s\].
     rate: f64,
     /// True when the step moved enough to measure the rate.
     moved: bool,
@@ -60,7 +60,7 @@ pub struct StepAssessment {
     dln: f64,
     /// Largest plastic strain increment over the allowed one.
     psi_dp: f64,
-    /// Estimated signed error of the step in time [s] (positive: late).
+    /// Estimated signed error of the step in time \[s\] (positive: late).
     pub error: f64,
 }
 
@@ -70,19 +70,19 @@ pub struct StepController {
     tolerance: f64,
     max_strain_increment: f64,
     dt_min: f64,
-    /// Rate of the last step that moved [1/s].
+    /// Rate of the last step that moved \[1/s\].
     last_rate: Option<f64>,
     history: VecDeque<RateSample>,
-    /// The step to try next [s].
+    /// The step to try next \[s\].
     dt_next: f64,
-    /// Sum of the signed per-step error estimates [s].
+    /// Sum of the signed per-step error estimates \[s\].
     time_error: f64,
 }
 
 impl StepController {
     /// A controller aiming at `tolerance` error per unit time, rejecting
     /// steps whose plastic strain increment exceeds twice
-    /// `max_strain_increment`, starting with `dt0` [s].
+    /// `max_strain_increment`, starting with `dt0` \[s\].
     pub fn new(tolerance: f64, max_strain_increment: f64, dt0: f64, dt_min: f64) -> Self {
         Self {
             tolerance,
@@ -95,23 +95,23 @@ impl StepController {
         }
     }
 
-    /// The controller's proposal for the next step [s].
+    /// The controller's proposal for the next step \[s\].
     pub fn dt_next(&self) -> f64 {
         self.dt_next
     }
 
-    /// Smallest step before giving up [s].
+    /// Smallest step before giving up \[s\].
     pub fn dt_min(&self) -> f64 {
         self.dt_min
     }
 
-    /// Estimated time error accumulated so far [s].
+    /// Estimated time error accumulated so far \[s\].
     pub fn time_error(&self) -> f64 {
         self.time_error
     }
 
-    /// Judges a converged step of `dt` [s] whose piston log-strain rate was
-    /// `rate` [1/s], at load factor to the n `weight`, with largest plastic
+    /// Judges a converged step of `dt` \[s\] whose piston log-strain rate was
+    /// `rate` \[1/s\], at load factor to the n `weight`, with largest plastic
     /// strain increment `max_dp` and contact noise `noise` (the strain the
     /// contact multipliers may move the cell by regardless of the flow, see
     /// [`NOISE_FACTOR`]): the assessment to accept it with, or the shorter
@@ -194,7 +194,7 @@ impl StepController {
 mod tests {
     use super::*;
 
-    /// Runs the controller on a flow of constant rate `rate` [1/s] whose
+    /// Runs the controller on a flow of constant rate `rate` \[1/s\] whose
     /// measured rate carries an alternating error of `noise` strain per
     /// step (the contact multipliers' correction), and returns the step it
     /// proposes after `steps` steps.

@@ -6,7 +6,7 @@ use tidens_solver::{
     Status,
 };
 
-/// The sc cell of `material` at `stress` [MPa] (1 s ramp), pressed to
+/// The sc cell of `material` at `stress` \[MPa\] (1 s ramp), pressed to
 /// `until_density` on mesh `level` with time tolerance `tolerance`.
 fn sc_simulation(
     material: Material,

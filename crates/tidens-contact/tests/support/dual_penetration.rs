@@ -58,7 +58,7 @@ fn newton_step<D: DualNum<Primitive = f64> + Copy>(
 }
 
 /// Penetration of the slave point `w[0..3]` into the bilinear patch of
-/// nodes `w[3..6], ..., w[12..15]` [mm]; `xi0` is the converged projection.
+/// nodes `w[3..6], ..., w[12..15]` \[mm\]; `xi0` is the converged projection.
 pub fn penetration<D: DualNum<Primitive = f64> + Copy>(w: &SVector<D, 15>, xi0: [f64; 2]) -> D {
     let s = [w[0], w[1], w[2]];
     let x: [[D; 3]; 4] = std::array::from_fn(|a| [w[3 + 3 * a], w[4 + 3 * a], w[5 + 3 * a]]);

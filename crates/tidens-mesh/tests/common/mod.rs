@@ -148,7 +148,7 @@ pub fn min_node_spacing(mesh: &HexMesh, cell: f64) -> f64 {
     best
 }
 
-/// Sum over the boundary of the outward area vectors [mm^2] (zero for a closed surface).
+/// Sum over the boundary of the outward area vectors \[mm^2\] (zero for a closed surface).
 pub fn boundary_area_sum(mesh: &HexMesh) -> [f64; 3] {
     let mut s = [0.0; 3];
     for f in &mesh.boundary {
@@ -160,7 +160,7 @@ pub fn boundary_area_sum(mesh: &HexMesh) -> [f64; 3] {
     s
 }
 
-/// Volume [mm^3] from the divergence theorem, (1/3) sum over the boundary of x.n dA.
+/// Volume \[mm^3\] from the divergence theorem, (1/3) sum over the boundary of x.n dA.
 pub fn divergence_volume(mesh: &HexMesh) -> f64 {
     mesh.boundary
         .iter()

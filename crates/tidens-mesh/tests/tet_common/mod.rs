@@ -197,7 +197,7 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-/// Area vector (outward normal times area, exact) [mm^2] of a 6-node triangle.
+/// Area vector (outward normal times area, exact) \[mm^2\] of a 6-node triangle.
 pub fn area_vector(p: &[[f64; 3]; 6]) -> [f64; 3] {
     let mut a = [0.0; 3];
     for (st, w) in triangle_rule() {
@@ -210,7 +210,7 @@ pub fn area_vector(p: &[[f64; 3]; 6]) -> [f64; 3] {
     a
 }
 
-/// Flux of the position field, integral of x . n dA (exact) [mm^3].
+/// Flux of the position field, integral of x . n dA (exact) \[mm^3\].
 pub fn position_flux(p: &[[f64; 3]; 6]) -> f64 {
     triangle_rule()
         .iter()
