@@ -15,6 +15,10 @@ t(0.9) and t(0.95) against the converged references of
 ``benches/references.json`` (made by ``benches/references.py``), with the
 reference's own uncertainty in brackets.
 
+The wall time includes the coarse companion run of the error estimate
+(its share is the ``companion [s]`` column); ``-- --no-error-estimate``
+times the run alone, as the figures measured before the estimate existed.
+
 ``--save`` writes the figures as JSON and ``--compare`` prints a ratio
 column against such a file (before/after tables from one script).
 ``--tidens`` runs another installation's command (e.g. an older version in
@@ -59,6 +63,7 @@ def run_once(tidens: str, name: str, out: Path, extra: list[str], env: dict[str,
         "wall_s": wall,
         "peak_rss_mb": usage.ru_maxrss / 1024.0,  # Linux reports kB
         "solver_s": summary["wall_seconds"],
+        "companion_s": (summary.get("error_estimate") or {}).get("companion_wall_seconds"),
         "steps": summary["steps"],
         "newton": summary["newton_iterations"],
         "factorizations": int(stats.get("llt_factorizations", 0) + stats.get("lblt_factorizations", 0)),
@@ -80,8 +85,8 @@ def measure(tidens: str, name: str, repeat: int, extra: list[str], env: dict[str
             runs.append(run_once(tidens, name, Path(tmp) / f"{name}-{k}", extra, env))
     # The medians of the timings; the rest is the same in every run.
     out = dict(runs[0])
-    for key in ("wall_s", "solver_s", "evaluation_s", "contact_s", "assembly_s", "linear_s", "peak_rss_mb"):
-        values = [r[key] for r in runs if r[key] is not None]
+    for key in ("wall_s", "solver_s", "companion_s", "evaluation_s", "contact_s", "assembly_s", "linear_s", "peak_rss_mb"):
+        values = [r[key] for r in runs if r.get(key) is not None]
         out[key] = statistics.median(values) if values else None
     out["walls_s"] = [r["wall_s"] for r in runs]
     return out
@@ -108,7 +113,7 @@ def errors(name: str, result: dict[str, Any], refs: dict[str, Any]) -> list[str]
     return cells
 
 
-COLUMNS = ["case", "level", "dofs", "wall [s]", "peak MB", "solver [s]", "steps", "Newton", "factorisations", "evaluation [s]", "contact [s]", "assembly [s]", "linear [s]"]
+COLUMNS = ["case", "level", "dofs", "wall [s]", "peak MB", "solver [s]", "companion [s]", "steps", "Newton", "factorisations", "evaluation [s]", "contact [s]", "assembly [s]", "linear [s]"]
 
 
 def header(before: bool) -> None:
@@ -125,6 +130,7 @@ def row(name: str, r: dict[str, Any], refs: dict[str, Any], before: dict[str, An
     cells += [
         fmt(r["peak_rss_mb"], ".0f"),
         fmt(r["solver_s"], ".2f"),
+        fmt(r.get("companion_s"), ".2f"),
         str(r["steps"]),
         str(r["newton"]),
         str(r["factorizations"]),

@@ -126,6 +126,7 @@ def test_cell_file_from_the_command_line(tmp_path: Path, capsys: pytest.CaptureF
         (["--cell-file", "cell.toml", "--radius", "0.1"], ("--radius", "--cell-file")),
         (["--cell-file", "cell.toml", "--size-ratio", "2"], ("--size-ratio", "--cell-file")),
         (["--contact", "sticky"], ("--contact", "frictionless", "tied")),
+        (["--accuracy", "0.05"], ("--accuracy", "--mesh-level", "--tolerance")),
     ],
 )
 def test_conflicting_cell_options_are_refused(

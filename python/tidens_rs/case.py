@@ -2,16 +2,28 @@
 
 from __future__ import annotations
 
+import sys
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from . import _core, io
 from ._core import CONTACT_MODES, SOLVER_DEFAULTS, Cell, ConvergenceError, Material
-from .result import Result
+from .estimate import COMPANION_TOLERANCE_FACTOR, ErrorEstimate, estimate_error
+from .result import MARK_DENSITIES, Result
 from .snapshot import Snapshot
+
+# Curve columns the error estimate reads.
+ESTIMATE_COLUMNS = ("time_s", "rel_density", "time_error_s")
+
+# The largest time tolerance the core accepts.
+MAX_TOLERANCE = 0.5
+# The range of Case.run(accuracy=...), and the ladder it climbs.
+MIN_ACCURACY, MAX_ACCURACY = 1e-3, 0.5
+LADDER_TOLERANCE_AT_LEVEL_3 = 0.01
+LADDER_LAST_LEVEL = 5
 
 # The defaults are the core's (one source); these two are named because
 # scripts and the command line quote them.
@@ -178,6 +190,8 @@ class Case:
         snapshot_times_s: Sequence[float] = (),
         progress: bool = False,
         callback: ProgressCallback | None = None,
+        error_estimate: bool = True,
+        accuracy: float | None = None,
     ) -> Result:
         """Presses until ``until_density`` or ``until_time_s`` (whichever first).
 
@@ -189,14 +203,164 @@ class Case:
         after every converged step with the curve point; returning False stops
         the run. ``progress`` shows a progress bar on stderr.
 
+        With ``error_estimate`` (the default), a run that reaches its target
+        is followed by a coarse companion run (the same case one mesh level
+        down at twice the tolerance, a fifth to a third of the cost) whose
+        difference gives :attr:`Result.error_estimate` (see
+        :mod:`tidens_rs.estimate`); its curve goes to
+        ``companion_curve.csv``. False skips it: the estimate then has the
+        step controller's time bound only. A failure or an interruption (Ctrl-C) of the companion
+        leaves the result as it is, the mesh part None and the reason in
+        ``error_estimate.method``.
+
+        ``accuracy`` (a relative error of t(rho), in [0.001, 0.5]) asks for
+        an accuracy instead of a mesh: the run climbs the ladder of mesh
+        level L at tolerance 0.01 * 2^(3 - L) (level 1 at 0.04, 2 at 0.02, 3
+        at 0.01, ...), each rung the companion of the next, and stops at the
+        first rung (from level 2) whose estimated error, the largest over
+        the densities reached, is at most ``accuracy``; it replaces
+        ``solver.mesh_level`` and ``solver.tolerance`` and keeps the other
+        settings (the element included). The result is that rung's, its
+        case carries the level and tolerance chosen, and
+        ``Result.accuracy_search`` lists the rungs. Level 5 is the last
+        rung: if it is not accurate enough, its result is returned with
+        ``accuracy_search["reached"]`` False.
+
         A solver failure raises :class:`ConvergenceError` with the partial
         result in its ``result`` attribute.
         """
         if until_density is None and until_time_s is None:
             raise ValueError("until_density = None and until_time_s = None: give at least one")
-        sim = self.simulation(until_density, until_time_s, snapshot_times_s)
+        if not isinstance(error_estimate, bool):
+            raise TypeError(f"error_estimate = {error_estimate!r}: must be True or False")
         out = Path(out_dir) if out_dir is not None else None
-        writer = io.CurveWriter(out / "curve.csv") if out is not None else None
+        if accuracy is not None:
+            if isinstance(accuracy, bool) or not isinstance(accuracy, (int, float)):
+                raise TypeError(f"accuracy = {accuracy!r}: must be a number")
+            if not MIN_ACCURACY <= accuracy <= MAX_ACCURACY:
+                raise ValueError(f"accuracy = {accuracy!r}: must be in [{MIN_ACCURACY:g}, {MAX_ACCURACY:g}] (a relative error of t(rho))")
+            if not error_estimate:
+                raise ValueError("accuracy needs the error estimate: error_estimate=False excludes it")
+            return self._run_to_accuracy(
+                float(accuracy),
+                until_density,
+                until_time_s,
+                out,
+                snapshot_densities=snapshot_densities,
+                snapshot_times_s=snapshot_times_s,
+                progress=progress,
+                callback=callback,
+            )
+        result, error = self._press(
+            until_density,
+            until_time_s,
+            curve_path=out / "curve.csv" if out is not None else None,
+            snapshot_densities=snapshot_densities,
+            snapshot_times_s=snapshot_times_s,
+            progress=progress,
+            callback=callback,
+        )
+        why: str | None = None
+        if error is not None or result.status not in ("reached_density", "reached_time"):
+            why = f"the run ended with status {result.status}"
+        elif not error_estimate:
+            why = "not asked for (error_estimate=False)"
+        result.error_estimate = self._estimate(result, until_density, until_time_s, out, progress, why)
+        if out is not None:
+            result.write_summary(out / "summary.json")
+            result.write_vtu(out)
+        if error is not None:
+            error.result = result  # type: ignore[attr-defined]
+            raise error
+        return result
+
+    def _run_to_accuracy(
+        self,
+        accuracy: float,
+        until_density: float | None,
+        until_time_s: float | None,
+        out: Path | None,
+        *,
+        snapshot_densities: Sequence[float],
+        snapshot_times_s: Sequence[float],
+        progress: bool,
+        callback: ProgressCallback | None,
+    ) -> Result:
+        """Climbs the accuracy ladder (see :meth:`run`)."""
+        rungs: list[dict[str, Any]] = []
+        previous: Result | None = None
+        curve_path = out / "curve.csv" if out is not None else None
+        for level in range(1, LADDER_LAST_LEVEL + 1):
+            tolerance = accuracy_ladder_tolerance(level)
+            rung = replace(self, solver=replace(self.solver, mesh_level=level, tolerance=tolerance))
+            if progress:
+                print(f"tidens: accuracy ladder, mesh level {level}, tolerance {tolerance:g}", file=sys.stderr)
+            if curve_path is not None and previous is not None:
+                # The last rung becomes this one's companion.
+                curve_path.replace(curve_path.with_name("companion_curve.csv"))
+            result, error = rung._press(
+                until_density,
+                until_time_s,
+                curve_path=curve_path,
+                snapshot_densities=snapshot_densities,
+                snapshot_times_s=snapshot_times_s,
+                progress=progress,
+                callback=callback,
+            )
+            done = error is not None or result.status not in ("reached_density", "reached_time")
+            if done:
+                why = f"the run ended with status {result.status}"
+                result.error_estimate = rung._estimate(result, None, None, None, False, why)
+            elif previous is None:
+                result.error_estimate = rung._estimate(result, None, None, None, False, None)
+            else:
+                result.error_estimate = _estimate_with(result, previous, None)
+            worst = result.error_estimate.curve["relative"]
+            rungs.append(
+                {
+                    "mesh_level": level,
+                    "tolerance": tolerance,
+                    "estimated_error": worst,
+                    "wall_seconds": result.wall_seconds,
+                    "status": result.status,
+                }
+            )
+            reached = worst is not None and worst <= accuracy
+            if done or reached or level == LADDER_LAST_LEVEL:
+                result.accuracy_search = {
+                    "target": accuracy,
+                    "reached": reached,
+                    "rungs": rungs,
+                    "wall_seconds": sum(r["wall_seconds"] for r in rungs),
+                }
+                if progress and not reached and not done:
+                    print(f"tidens: level {level} is the last rung: estimated error {worst:.3g} > {accuracy:g}", file=sys.stderr)
+                if out is not None:
+                    result.write_summary(out / "summary.json")
+                    result.write_vtu(out)
+                if error is not None:
+                    error.result = result  # type: ignore[attr-defined]
+                    raise error
+                return result
+            previous = result
+        raise AssertionError("unreachable: the ladder returns at its last rung")
+
+    def _press(
+        self,
+        until_density: float | None,
+        until_time_s: float | None,
+        *,
+        curve_path: Path | None,
+        snapshot_densities: Sequence[float] = (),
+        snapshot_times_s: Sequence[float] = (),
+        progress: bool = False,
+        callback: ProgressCallback | None = None,
+        fields: bool = True,
+    ) -> tuple[Result, BaseException | None]:
+        """One run of the solver, streaming its curve to ``curve_path``: the
+        result and the exception that ended it (None if none did)."""
+        sim = self.simulation(until_density, until_time_s, snapshot_times_s)
+        writer = io.CurveWriter(curve_path) if curve_path is not None else None
         pending_rho = sorted(r for r in snapshot_densities)
         pending_t = sorted(t for t in snapshot_times_s)
         snapshots: list[Snapshot] = []
@@ -232,7 +396,8 @@ class Case:
                 writer.close()
         curve = sim.curve()
         last = {k: v[-1] for k, v in curve.items()}
-        snapshots.append(_snapshot(sim, "final", last))
+        if fields:
+            snapshots.append(_snapshot(sim, "final", last))
         result = Result(
             case=self,
             curve=curve,
@@ -247,13 +412,69 @@ class Case:
         )
         if bar is not None:
             bar(None)
-        if out is not None:
-            result.write_summary(out / "summary.json")
-            result.write_vtu(out)
-        if error is not None:
-            error.result = result  # type: ignore[attr-defined]
-            raise error
-        return result
+        return result, error
+
+    def _estimate(
+        self,
+        result: Result,
+        until_density: float | None,
+        until_time_s: float | None,
+        out: Path | None,
+        progress: bool,
+        why_not: str | None,
+    ) -> ErrorEstimate:
+        """The error estimate of ``result``; runs the coarse companion unless
+        ``why_not`` says why not, or the level is the coarsest."""
+        level = self.solver.mesh_level
+        arrays = {k: result.curve[k] for k in ESTIMATE_COLUMNS}
+        if why_not is None and level <= 1:
+            why_not = f"mesh level {level} is the coarsest: there is no coarser companion"
+        if why_not is not None:
+            return estimate_error(arrays, None, MARK_DENSITIES, level=level, companion_note=why_not)
+        tolerance = companion_tolerance(self.solver.tolerance)
+        companion = replace(self, solver=replace(self.solver, mesh_level=level - 1, tolerance=tolerance))
+        if progress:
+            print(f"tidens: coarse companion run at mesh level {level - 1}, tolerance {tolerance:g} (for the error estimate)", file=sys.stderr)
+        other, error = companion._press(
+            until_density,
+            until_time_s,
+            curve_path=out / "companion_curve.csv" if out is not None else None,
+            progress=progress,
+            fields=False,
+        )
+        return _estimate_with(result, other, error)
+
+
+
+def companion_tolerance(tolerance: float) -> float:
+    """The tolerance of a run's coarse companion."""
+    return min(COMPANION_TOLERANCE_FACTOR * tolerance, MAX_TOLERANCE)
+
+
+def accuracy_ladder_tolerance(level: int) -> float:
+    """The tolerance of mesh level ``level`` on the accuracy ladder: each
+    rung is the coarse companion of the next."""
+    return float(LADDER_TOLERANCE_AT_LEVEL_3 * COMPANION_TOLERANCE_FACTOR ** (3 - level))
+
+
+def _estimate_with(result: Result, companion: Result, error: BaseException | None) -> ErrorEstimate:
+    """The estimate of ``result`` from its coarse ``companion`` (which ended
+    with ``error``, if any)."""
+    level = result.case.solver.mesh_level
+    arrays = {k: result.curve[k] for k in ESTIMATE_COLUMNS}
+    if error is not None or companion.status not in ("reached_density", "reached_time"):
+        note = f"the companion at mesh level {companion.case.solver.mesh_level} ended with status {companion.status}"
+        if companion.message:
+            note += f" ({companion.message})"
+        return estimate_error(arrays, None, MARK_DENSITIES, level=level, companion_note=note)
+    return estimate_error(
+        arrays,
+        {k: companion.curve[k] for k in ESTIMATE_COLUMNS},
+        MARK_DENSITIES,
+        level=level,
+        companion_level=companion.case.solver.mesh_level,
+        companion_wall_seconds=companion.wall_seconds,
+    )
 
 
 def _snapshot(sim: _core.Simulation, label: str, point: dict[str, float]) -> Snapshot:

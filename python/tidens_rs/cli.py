@@ -55,11 +55,13 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--until-density", type=float, help="stop at this relative density")
     g.add_argument("--until-time", type=float, help="stop at this time [s]")
     g = p.add_argument_group("numerics")
-    g.add_argument("--mesh-level", type=int, default=DEFAULT_MESH_LEVEL, help=f"mesh level, 1 (coarsest) to 6; each level refines the elements by about sqrt(2) (default {DEFAULT_MESH_LEVEL})")
-    g.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE, help=f"time-integration accuracy, relative error of t(rho) (default {DEFAULT_TOLERANCE:g})")
+    g.add_argument("--accuracy", type=float, help="ask for an accuracy instead of a mesh: the relative error of t(rho) wanted, in [0.001, 0.5]; climbs mesh levels 1, 2, 3, ... (tolerance 0.04, 0.02, 0.01, ...) until the estimated error is within it (excludes --mesh-level and --tolerance)")
+    g.add_argument("--mesh-level", type=int, help=f"mesh level, 1 (coarsest) to 6; each level refines the elements by about sqrt(2) (default {DEFAULT_MESH_LEVEL})")
+    g.add_argument("--tolerance", type=float, help=f"time-integration accuracy, relative error of t(rho) (default {DEFAULT_TOLERANCE:g})")
     g.add_argument("--grading", type=float, default=_DEFAULTS.grading, help=f"element-size ratio toward the contact points (default {_DEFAULTS.grading:g})")
     g.add_argument("--exact-volume", action=argparse.BooleanOptionalAction, default=_DEFAULTS.exact_volume, help=f"move each particle's surface nodes outward (contact points kept on the surface) so that its mesh has the exact spheroid volume (default {'on' if _DEFAULTS.exact_volume else 'off'})")
     g.add_argument("--element", choices=ELEMENTS, default=_DEFAULTS.element, help=f"hex8: mean-dilatation hexahedra; tet10: quadratic tetrahedra with one pressure, cut from the same blocks (single-particle cells only); default {_DEFAULTS.element}")
+    g.add_argument("--no-error-estimate", dest="error_estimate", action="store_false", help="skip the coarse companion run (one mesh level down at twice the tolerance, a fifth to a third of the cost) that gives the error estimate")
     g.add_argument("--max-steps", type=int, default=_DEFAULTS.max_steps, help=f"step limit (default {_DEFAULTS.max_steps})")
     g = p.add_argument_group("output")
     g.add_argument("--out", type=Path, required=True, help="output directory")
@@ -109,19 +111,31 @@ def _fmt(value: float | None) -> str:
     return "-" if value is None else f"{value:.4g}"
 
 
+def _pct(value: float | None) -> str:
+    return "-" if value is None else f"{100 * value:.2f} %"
+
+
 def _report(result: Result) -> None:
     s = result.summary()
     cell, contact = s["cell"], s["contact"]
     planes = ", tied planes (sensitivity option)" if contact["tied_planes"] else ""
     print(f"cell {cell['name']} ({len(cell['octants'])} octant(s), rho0 {cell['rho0_exact']:.5f}), {contact['mode']} contact{planes}")
     print(f"status: {s['status']}   final density {s['final_density']:.4f} at t = {s['final_time_s']:.4g} s")
-    print(f"{'rho':>5} {'t FE [s]':>12} {'err est [s]':>12} {'t continuum [s]':>16}")
+    est = s["error_estimate"]
+    print(f"{'rho':>5} {'t FE [s]':>12} {'error est':>10} {'t continuum [s]':>16}")
     for r in MARK_DENSITIES:
         k = f"{r:g}"
         fe = s["times_to_density_s"].get(k)
-        err = s["time_error_estimate_s"].get(k)
         cm = s["continuum_times_to_density_s"].get(k)
-        print(f"{r:5.2f} {_fmt(fe):>12} {_fmt(err):>12} {_fmt(cm):>16}")
+        print(f"{r:5.2f} {_fmt(fe):>12} {_pct(est['relative'].get(k)):>10} {_fmt(cm):>16}")
+    print(f"error estimate: {est['method']['mesh']}")
+    search = s["accuracy"]
+    if search is not None:
+        rungs = ", ".join(
+            f"level {r['mesh_level']} ({'-' if r['estimated_error'] is None else _pct(r['estimated_error'])})" for r in search["rungs"]
+        )
+        verdict = "reached" if search["reached"] else "NOT reached (the last rung was not accurate enough)"
+        print(f"accuracy {_pct(search['target'])} {verdict}: {rungs}; {search['wall_seconds']:.1f} s in all")
     print(
         f"wall {s['wall_seconds']:.1f} s, {s['steps']} steps, {s['newton_iterations']} Newton iterations, "
         f"{s['degrees_of_freedom']} dofs (mesh level {s['mesh_level']}, tolerance {s['tolerance']:g})"
@@ -141,6 +155,11 @@ def _import_matplotlib() -> None:
 def _run(args: argparse.Namespace) -> int:
     if args.until_density is None and args.until_time is None:
         raise ValueError("give --until-density, --until-time or both")
+    if args.accuracy is not None:
+        if args.mesh_level is not None or args.tolerance is not None:
+            raise ValueError("--accuracy chooses the mesh level and the tolerance: it excludes --mesh-level and --tolerance")
+        if not args.error_estimate:
+            raise ValueError("--accuracy needs the error estimate: it excludes --no-error-estimate")
     if not args.no_plot:
         threading.Thread(target=_import_matplotlib, daemon=True).start()
     case = Case(
@@ -152,8 +171,8 @@ def _run(args: argparse.Namespace) -> int:
         contact=args.contact,
         tied_planes=args.tied_planes,
         solver=SolverSettings(
-            mesh_level=args.mesh_level,
-            tolerance=args.tolerance,
+            mesh_level=args.mesh_level if args.mesh_level is not None else DEFAULT_MESH_LEVEL,
+            tolerance=args.tolerance if args.tolerance is not None else DEFAULT_TOLERANCE,
             grading=args.grading,
             exact_volume=args.exact_volume,
             element=args.element,
@@ -173,6 +192,8 @@ def _run(args: argparse.Namespace) -> int:
             snapshot_densities=densities,
             snapshot_times_s=args.vtu_times,
             progress=not args.quiet,
+            error_estimate=args.error_estimate,
+            accuracy=args.accuracy,
         )
     except ConvergenceError as e:
         print(f"tidens: solver failure: {e}\n(partial results in {out})", file=sys.stderr)

@@ -32,9 +32,12 @@ def plot_density(result: Result) -> Figure:
         label += f", {c.contact} contact"
     if c.tied_planes:
         label += ", tied planes"
+    band = _error_band(result)
     for ax, log in zip(axes, (False, True)):
         keep = t > 0 if log else np.ones_like(t, dtype=bool)
         ax.plot(t[keep], rho[keep], "-", color="C0", label=label)
+        if band is not None:
+            ax.fill_betweenx(rho[keep], (t * (1 - band))[keep], (t * (1 + band))[keep], color="C0", alpha=0.2, lw=0, label="estimated error")
         keep_c = tc > 0 if log else np.ones_like(tc, dtype=bool)
         ax.plot(tc[keep_c], rc[keep_c], "--", color="C3", label="continuum model (Eqs. 2, 3 of the paper)")
         ax.set_xlabel("time [s]")
@@ -48,3 +51,15 @@ def plot_density(result: Result) -> Figure:
     )
     axes[0].legend(loc="lower right")
     return fig
+
+
+def _error_band(result: Result) -> np.ndarray | None:
+    """The estimated relative error of t at each curve point: the estimate
+    at the reported densities, linear in rho between them and constant
+    beyond; None when no total estimate is known."""
+    est = result.estimate().relative
+    pts = sorted((float(k), v) for k, v in est.items() if v is not None)
+    if not pts or len(pts) < len(est):
+        return None
+    rs, es = zip(*pts)
+    return np.asarray(np.interp(result.rel_density, np.array(rs), np.array(es)))

@@ -12,6 +12,7 @@ import numpy as np
 from . import cells, io
 from ._core import Cell, __version__
 from .continuum import ContinuumModel
+from .estimate import ErrorEstimate, estimate_error
 from .materials import name_of
 from .snapshot import Snapshot
 
@@ -20,7 +21,7 @@ if TYPE_CHECKING:
 
     from .case import Case
 
-MARK_DENSITIES = (0.6, 0.7, 0.8, 0.9)
+MARK_DENSITIES = (0.6, 0.7, 0.8, 0.9, 0.95)
 
 
 def interpolate_time(time_s: np.ndarray, rho: np.ndarray, target: float) -> float | None:
@@ -60,7 +61,9 @@ class Result:
     attributes: ``time_s``, ``rel_density``, ``piston_displacement_mm``,
     ``applied_stress_mpa``. ``status`` is ``reached_density``,
     ``reached_time``, ``stopped`` (by a callback), ``interrupted`` or
-    ``failed`` (then ``message`` says why).
+    ``failed`` (then ``message`` says why). ``error_estimate`` is the
+    estimated error of its times to density (see :mod:`tidens_rs.estimate`);
+    ``accuracy_search`` the rungs a run with ``accuracy=`` climbed.
     """
 
     case: Case
@@ -73,6 +76,8 @@ class Result:
     elements: int
     snapshots: list[Snapshot] = field(default_factory=list)
     message: str | None = None
+    error_estimate: ErrorEstimate | None = None
+    accuracy_search: dict[str, Any] | None = None
 
     @property
     def time_s(self) -> np.ndarray:
@@ -105,6 +110,14 @@ class Result:
         if t is None:
             return None
         return float(np.interp(t, self.time_s, self.curve["time_error_s"]))
+
+    def estimate(self) -> ErrorEstimate:
+        """The run's error estimate: the one :meth:`Case.run` made, or, for a
+        result made otherwise, the time part alone."""
+        if self.error_estimate is not None:
+            return self.error_estimate
+        arrays = {k: self.curve[k] for k in ("time_s", "rel_density", "time_error_s")}
+        return estimate_error(arrays, None, MARK_DENSITIES, companion_note="no companion run")
 
     def continuum(self) -> ContinuumModel:
         """The continuum model for this run's material, load and exact rho0."""
@@ -156,11 +169,14 @@ class Result:
             "solver": c.solver.as_dict(),
             "mesh_level": c.solver.mesh_level,
             "tolerance": c.solver.tolerance,
+            "element": c.solver.element,
             "rho0": self.rho0,
             "final_density": last["rel_density"],
             "final_time_s": last["time_s"],
             "times_to_density_s": reached,
             "time_error_estimate_s": {k: v for k, v in errors.items() if k in reached},
+            "error_estimate": self.estimate().as_dict(),
+            "accuracy": self.accuracy_search,
             "continuum_times_to_density_s": continuum_times,
             "wall_seconds": self.wall_seconds,
             "steps": int(last["step"]),

@@ -1,0 +1,236 @@
+"""Error against run time: a ladder of mesh levels and tolerances per cell
+and element, each run's true error against the references, the Pareto front,
+and how each run's own error estimate compares with its true error.
+
+    python benches/accuracy.py [--cases sc10 sc bcc fcc sc2] [--elements hex8]
+                               [--levels 1 2 3] [--tolerances 0.04 0.02 0.01]
+                               [--out benches/accuracy.json] [--plot accuracy.png]
+                               [--report-only]
+
+Every run is a default run but for its level, tolerance and element (Ti-6Al-4V
+at 1293 K, the cases of ``speed_cases.py``). Its true error is the largest
+relative error of t(0.8), t(0.9), t(0.95) against ``references.json``; its
+cost is its wall time plus that of its coarse companion (the run one level
+down at twice the tolerance, whose difference gives the error estimate; see
+``tidens_rs.estimate``), since a result with an error estimate costs both. Runs are stored in
+the output file as they finish, with their curves, and are not repeated:
+the command can be stopped and resumed, and ``--report-only`` reprints the
+tables from the file (the estimates are recomputed from the stored curves,
+so a change of the estimator needs no new runs).
+
+The tables: per run, wall time, cost with the companion, true error per
+density and overall, the estimate and its ratio to the true error, and
+whether the run is on the Pareto front (no other run of the same case and
+element is both cheaper, counting its companion, and more accurate). An
+estimate brackets the true error when est/3 <= |true| <= est, either side
+allowed the reference's own uncertainty. The observed orders come from
+``references.json`` (``benches/references.py``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import tidens_rs as td
+from speed_cases import CASES, MARKS
+from tidens_rs.estimate import COMPANION_TOLERANCE_FACTOR, ErrorEstimate, estimate_error
+
+HERE = Path(__file__).resolve().parent
+ELEMENT_LEVELS = {"hex8": (1, 2, 3), "tet10": (1, 2)}
+
+
+def key(case: str, element: str, level: int, tol: float) -> str:
+    return f"{case}/{element}/level{level}/tol{tol:g}"
+
+
+def run(case: str, element: str, level: int, tolerance: float) -> dict[str, Any]:
+    cell, stress, until = CASES[case]
+    c = td.Case(
+        cell=td.cells.by_name(cell),
+        material=td.materials.TI64_CREEP_1293K,
+        stress_mpa=stress,
+        solver=td.SolverSettings(mesh_level=level, tolerance=tolerance, element=element),
+    )
+    t0 = time.perf_counter()
+    r = c.run(until_density=until, error_estimate=False)
+    wall = time.perf_counter() - t0
+    return {
+        "case": case,
+        "element": element,
+        "level": level,
+        "tolerance": tolerance,
+        "dofs": r.degrees_of_freedom,
+        "wall_s": wall,
+        "steps": int(r.curve["step"][-1]),
+        "time_s": r.time_s.tolist(),
+        "rel_density": r.rel_density.tolist(),
+        "time_error_s": r.curve["time_error_s"].tolist(),
+    }
+
+
+def as_result_arrays(r: dict[str, Any]) -> dict[str, np.ndarray]:
+    return {k: np.asarray(r[k]) for k in ("time_s", "rel_density", "time_error_s")}
+
+
+def companion_of(runs: dict[str, Any], r: dict[str, Any]) -> dict[str, Any] | None:
+    """The run's coarse companion: one level down at twice the tolerance."""
+    return runs.get(key(r["case"], r["element"], r["level"] - 1, COMPANION_TOLERANCE_FACTOR * r["tolerance"]))
+
+
+def estimate_of(runs: dict[str, Any], r: dict[str, Any]) -> ErrorEstimate | None:
+    """The estimate the run reports with its companion; None without one."""
+    below = companion_of(runs, r)
+    if below is None:
+        return None
+    _, _, until = CASES[r["case"]]
+    marks = [x for x in MARKS if x <= until]
+    return estimate_error(as_result_arrays(r), as_result_arrays(below), marks, level=r["level"], companion_level=r["level"] - 1)
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cases", nargs="+", choices=list(CASES), default=list(CASES))
+    ap.add_argument("--elements", nargs="+", choices=list(ELEMENT_LEVELS), default=["hex8"])
+    ap.add_argument("--levels", type=int, nargs="+", help="mesh levels (default 1 2 3 for hex8, 1 2 for tet10)")
+    ap.add_argument("--tolerances", type=float, nargs="+", default=[0.04, 0.02, 0.01])
+    ap.add_argument("--out", type=Path, default=HERE / "accuracy.json")
+    ap.add_argument("--references", type=Path, default=HERE / "references.json")
+    ap.add_argument("--plot", type=Path, help="error against cost, one panel per case")
+    ap.add_argument("--report-only", action="store_true", help="no new runs: tables from the stored ones")
+    args = ap.parse_args(argv)
+    data: dict[str, Any] = json.loads(args.out.read_text()) if args.out.exists() else {}
+    runs: dict[str, Any] = data.setdefault("runs", {})
+    refs = json.loads(args.references.read_text())["cases"]
+
+    if not args.report_only:
+        for case in args.cases:
+            for element in args.elements:
+                for level in args.levels or ELEMENT_LEVELS[element]:
+                    for tol in args.tolerances:
+                        k = key(case, element, level, tol)
+                        if k in runs:
+                            continue
+                        print(f"# run {k}", file=sys.stderr, flush=True)
+                        runs[k] = run(case, element, level, tol)
+                        data["command"] = "python benches/accuracy.py " + " ".join(sys.argv[1:] if argv is None else argv)
+                        args.out.write_text(json.dumps(data) + "\n")
+
+    rows = report(runs, refs, args.cases, args.elements)
+    if args.plot is not None:
+        plot(rows, args.plot)
+
+
+def report(runs: dict[str, Any], refs: dict[str, Any], cases: list[str], elements: list[str]) -> list[dict[str, Any]]:
+    rows: list[dict[str, Any]] = []
+    for r in runs.values():
+        if r["case"] not in cases or r["element"] not in elements:
+            continue
+        ref = refs[r["case"]]
+        marks = [k for k in ref["times_s"]]
+        t = {f"{m:g}": td.result.interpolate_time(np.asarray(r["time_s"]), np.asarray(r["rel_density"]), m) for m in MARKS}
+        true = {k: (t[k] - ref["times_s"][k]) / ref["times_s"][k] for k in marks if t.get(k) is not None}
+        unc = {k: ref["uncertainty_s"][k] / ref["times_s"][k] for k in marks}
+        estimate = estimate_of(runs, r)
+        below = companion_of(runs, r)
+        cost = r["wall_s"] + (below["wall_s"] if below else float("nan"))
+        rows.append({**{k: r[k] for k in ("case", "element", "level", "tolerance", "dofs", "wall_s", "steps")}, "cost_s": cost, "true": true, "unc": unc, "estimate": estimate})
+    rows.sort(key=lambda x: (x["case"], x["element"], x["level"], -x["tolerance"]))
+    counts = {"in": 0, "over": 0, "under": 0}
+    for case in cases:
+        for element in elements:
+            group = [x for x in rows if x["case"] == case and x["element"] == element]
+            if not group:
+                continue
+            for x in group:
+                worst = max(abs(v) for v in x["true"].values())
+                x["worst"] = worst
+            # The front among results with an error estimate (those with a companion).
+            priced = [x for x in group if x["estimate"] is not None]
+            for x in group:
+                x["pareto"] = x["estimate"] is not None and not any(
+                    y is not x and y["cost_s"] <= x["cost_s"] and y["worst"] < x["worst"] for y in priced
+                )
+            marks = list(group[0]["true"])
+            print(f"\n{case}, {element} (errors against references.json, the reference's own uncertainty in brackets)")
+            print(
+                "| level | tol | dofs | wall [s] | with companion [s] | steps | "
+                + " | ".join(f"true t({k}) | est t({k})" for k in marks)
+                + " | worst true | Pareto |"
+            )
+            print("|" + "---|" * (8 + 2 * len(marks)))
+            for x in group:
+                est: ErrorEstimate | None = x["estimate"]
+                cells = []
+                for k in marks:
+                    tv = x["true"].get(k)
+                    ev = est.relative.get(k) if est is not None else None
+                    cells.append("-" if tv is None else f"{100 * tv:+.2f} % (±{100 * x['unc'][k]:.1f})")
+                    mark = ""
+                    if tv is not None and ev is not None:
+                        verdict = bracket(abs(tv), x["unc"][k], ev)
+                        counts[verdict] += 1
+                        mark = {"in": "", "over": " (over)", "under": " (UNDER)"}[verdict]
+                    cells.append("-" if ev is None else f"{100 * ev:.2f} %{mark}")
+                print(
+                    f"| {x['level']} | {x['tolerance']:g} | {x['dofs']} | {x['wall_s']:.1f} | {'-' if x['estimate'] is None else format(x['cost_s'], '.1f')} | {x['steps']} | "
+                    + " | ".join(cells)
+                    + f" | {100 * x['worst']:.2f} % | {'yes' if x['pareto'] else ('' if x['estimate'] is not None else '-')} |"
+                )
+    n = sum(counts.values())
+    print(
+        f"\nestimates against true errors: {n} (run, density) pairs; {counts['in']} bracketed "
+        f"(est/3 <= |true| <= est), {counts['over']} more than 3 times the true error, "
+        f"{counts['under']} below it (each allowed the reference's uncertainty)"
+    )
+    return rows
+
+
+def bracket(true: float, uncertainty: float, est: float) -> str:
+    """Whether ``est`` brackets the true relative error as est/3 <= true <=
+    est, either side allowed the reference's ``uncertainty``."""
+    if true > est + uncertainty:
+        return "under"
+    if true + uncertainty < est / 3:
+        return "over"
+    return "in"
+
+
+def plot(rows: list[dict[str, Any]], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cases = sorted({x["case"] for x in rows})
+    fig, axes = plt.subplots(1, len(cases), figsize=(4 * len(cases), 3.6), squeeze=False)
+    for ax, case in zip(axes[0], cases):
+        for element, marker in (("hex8", "o"), ("tet10", "s")):
+            group = [x for x in rows if x["case"] == case and x["element"] == element]
+            if not group:
+                continue
+            group = [x for x in group if x["estimate"] is not None]
+            ax.scatter([x["cost_s"] for x in group], [100 * x["worst"] for x in group], marker=marker, label=element)
+            front = sorted((x for x in group if x["pareto"]), key=lambda x: x["cost_s"])
+            ax.plot([x["cost_s"] for x in front], [100 * x["worst"] for x in front], "-", alpha=0.6)
+            for x in group:
+                ax.annotate(f"L{x['level']}/{x['tolerance']:g}", (x["cost_s"], 100 * x["worst"]), fontsize=6)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_title(case)
+        ax.set_xlabel("wall time with the companion [s]")
+        ax.set_ylabel("largest error of t(0.8, 0.9, 0.95) [%]")
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    print(f"wrote {path}")
+
+
+if __name__ == "__main__":
+    main()
