@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 import tidens_rs as td
-from speed_cases import CASES, MARKS
+from speed_cases import CASES, MARKS, case_of
 from tidens_rs.estimate import COMPANION_TOLERANCE_FACTOR, ErrorEstimate, estimate_error
 
 HERE = Path(__file__).resolve().parent
@@ -51,13 +51,8 @@ def key(case: str, element: str, level: int, tol: float) -> str:
 
 
 def run(case: str, element: str, level: int, tolerance: float) -> dict[str, Any]:
-    cell, stress, until = CASES[case]
-    c = td.Case(
-        cell=td.cells.by_name(cell),
-        material=td.materials.TI64_CREEP_1293K,
-        stress_mpa=stress,
-        solver=td.SolverSettings(mesh_level=level, tolerance=tolerance, element=element),
-    )
+    _, _, until = CASES[case]
+    c = case_of(case, mesh_level=level, tolerance=tolerance, element=element)
     t0 = time.perf_counter()
     r = c.run(until_density=until, error_estimate=False)
     wall = time.perf_counter() - t0

@@ -39,24 +39,16 @@ from pathlib import Path
 from typing import Any
 
 import tidens_rs as td
-from speed_cases import CASES, MARKS
+from speed_cases import CASES, MARKS, case_of
+from tidens_rs.estimate import LEVEL_DIVISIONS as DIVISIONS
 
 HERE = Path(__file__).resolve().parent
-# Inner-cube divisions of the mesh levels (element size ~ 1 / divisions).
-DIVISIONS = {1: 4, 2: 6, 3: 8, 4: 11, 5: 16, 6: 23}
 
 
 def run(case: str, level: int, tolerance: float, exact_volume: bool) -> dict[str, Any]:
-    cell, stress, until = CASES[case]
-    c = td.Case(
-        cell=td.cells.by_name(cell),
-        material=td.materials.TI64_CREEP_1293K,
-        stress_mpa=stress,
-        # Newton converged tighter than the default, as a reference should be.
-        solver=td.SolverSettings(
-            mesh_level=level, tolerance=tolerance, exact_volume=exact_volume, newton_residual_tolerance=1e-6
-        ),
-    )
+    _, _, until = CASES[case]
+    # Newton converged tighter than the default, as a reference should be.
+    c = case_of(case, mesh_level=level, tolerance=tolerance, exact_volume=exact_volume, newton_residual_tolerance=1e-6)
     t0 = time.perf_counter()
     r = c.run(until_density=until)
     wall = time.perf_counter() - t0

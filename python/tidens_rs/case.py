@@ -266,13 +266,7 @@ class Case:
         elif not error_estimate:
             why = "not asked for (error_estimate=False)"
         result.error_estimate = self._estimate(result, until_density, until_time_s, out, progress, why)
-        if out is not None:
-            result.write_summary(out / "summary.json")
-            result.write_vtu(out)
-        if error is not None:
-            error.result = result  # type: ignore[attr-defined]
-            raise error
-        return result
+        return _finish(result, error, out)
 
     def _run_to_accuracy(
         self,
@@ -335,13 +329,7 @@ class Case:
                 }
                 if progress and not reached and not done:
                     print(f"tidens: level {level} is the last rung: estimated error {worst:.3g} > {accuracy:g}", file=sys.stderr)
-                if out is not None:
-                    result.write_summary(out / "summary.json")
-                    result.write_vtu(out)
-                if error is not None:
-                    error.result = result  # type: ignore[attr-defined]
-                    raise error
-                return result
+                return _finish(result, error, out)
             previous = result
         raise AssertionError("unreachable: the ladder returns at its last rung")
 
@@ -444,6 +432,18 @@ class Case:
         )
         return _estimate_with(result, other, error)
 
+
+
+def _finish(result: Result, error: BaseException | None, out: Path | None) -> Result:
+    """Writes the summary and the fields of a finished run to ``out``, and
+    re-raises the error that ended it, carrying the result."""
+    if out is not None:
+        result.write_summary(out / "summary.json")
+        result.write_vtu(out)
+    if error is not None:
+        error.result = result  # type: ignore[attr-defined]
+        raise error
+    return result
 
 
 def companion_tolerance(tolerance: float) -> float:
