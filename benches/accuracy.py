@@ -3,12 +3,14 @@ and element, each run's true error against the references, the Pareto front,
 and how each run's own error estimate compares with its true error.
 
     python benches/accuracy.py [--cases sc10 sc bcc fcc sc2] [--elements hex8]
-                               [--levels 1 2 3] [--tolerances 0.04 0.02 0.01]
+                               [--levels 2 3] [--tolerances 0.02 0.01]
                                [--out benches/accuracy.json] [--plot accuracy.png]
                                [--report-only]
 
 Every run is a default run but for its level, tolerance and element (Ti-6Al-4V
-at 1293 K, the cases of ``speed_cases.py``). Its true error is the largest
+at 1293 K, the cases of ``speed_cases.py``); each run studied (``--levels``
+x ``--tolerances``) also runs its companion (one level down at twice the
+tolerance). Its true error is the largest
 relative error of t(0.8), t(0.9), t(0.95) against ``references.json``; its
 cost is its wall time plus that of its coarse companion (the run one level
 down at twice the tolerance, whose difference gives the error estimate; see
@@ -18,12 +20,15 @@ the command can be stopped and resumed, and ``--report-only`` reprints the
 tables from the file (the estimates are recomputed from the stored curves,
 so a change of the estimator needs no new runs).
 
-The tables: per run, wall time, cost with the companion, true error per
-density and overall, the estimate and its ratio to the true error, and
+The tables: per case, the observed mesh and time orders of its reference
+ladders; per run, wall time, cost with the companion, true error per
+density and overall, the estimate (marked when it does not bracket), and
 whether the run is on the Pareto front (no other run of the same case and
 element is both cheaper, counting its companion, and more accurate). An
 estimate brackets the true error when est/3 <= |true| <= est, either side
-allowed the reference's own uncertainty. The observed orders come from
+allowed the reference's own uncertainty; runs at the finest level of their
+reference's mesh ladder (sc2 at level 3) are listed but not counted, since
+the reference is such a run. The observed orders come from
 ``references.json`` (``benches/references.py``).
 """
 
@@ -43,7 +48,8 @@ from speed_cases import CASES, MARKS, case_of
 from tidens_rs.estimate import COMPANION_TOLERANCE_FACTOR, ErrorEstimate, estimate_error
 
 HERE = Path(__file__).resolve().parent
-ELEMENT_LEVELS = {"hex8": (1, 2, 3), "tet10": (1, 2)}
+# Levels of the runs studied (each also runs its companion one level down).
+ELEMENT_LEVELS = {"hex8": (2, 3), "tet10": (2,)}
 
 
 def key(case: str, element: str, level: int, tol: float) -> str:
@@ -93,8 +99,8 @@ def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cases", nargs="+", choices=list(CASES), default=list(CASES))
     ap.add_argument("--elements", nargs="+", choices=list(ELEMENT_LEVELS), default=["hex8"])
-    ap.add_argument("--levels", type=int, nargs="+", help="mesh levels (default 1 2 3 for hex8, 1 2 for tet10)")
-    ap.add_argument("--tolerances", type=float, nargs="+", default=[0.04, 0.02, 0.01])
+    ap.add_argument("--levels", type=int, nargs="+", help="mesh levels studied (default 2 3 for hex8, 2 for tet10)")
+    ap.add_argument("--tolerances", type=float, nargs="+", default=[0.02, 0.01])
     ap.add_argument("--out", type=Path, default=HERE / "accuracy.json")
     ap.add_argument("--references", type=Path, default=HERE / "references.json")
     ap.add_argument("--plot", type=Path, help="error against cost, one panel per case")
@@ -109,13 +115,14 @@ def main(argv: list[str] | None = None) -> None:
             for element in args.elements:
                 for level in args.levels or ELEMENT_LEVELS[element]:
                     for tol in args.tolerances:
-                        k = key(case, element, level, tol)
-                        if k in runs:
-                            continue
-                        print(f"# run {k}", file=sys.stderr, flush=True)
-                        runs[k] = run(case, element, level, tol)
-                        data["command"] = "python benches/accuracy.py " + " ".join(sys.argv[1:] if argv is None else argv)
-                        args.out.write_text(json.dumps(data) + "\n")
+                        # The companion first, then the run.
+                        for lv, tl in ((level - 1, COMPANION_TOLERANCE_FACTOR * tol), (level, tol)):
+                            k = key(case, element, lv, tl)
+                            if lv < 1 or k in runs:
+                                continue
+                            print(f"# run {k}", file=sys.stderr, flush=True)
+                            runs[k] = run(case, element, lv, tl)
+                            args.out.write_text(json.dumps(data) + "\n")
 
     rows = report(runs, refs, args.cases, args.elements)
     if args.plot is not None:
@@ -135,7 +142,18 @@ def report(runs: dict[str, Any], refs: dict[str, Any], cases: list[str], element
         estimate = estimate_of(runs, r)
         below = companion_of(runs, r)
         cost = r["wall_s"] + (below["wall_s"] if below else float("nan"))
-        rows.append({**{k: r[k] for k in ("case", "element", "level", "tolerance", "dofs", "wall_s", "steps")}, "cost_s": cost, "true": true, "unc": unc, "estimate": estimate})
+        # The reference's finest level: a run there is compared with itself.
+        finest = max(ref["mesh"][marks[0]]["levels"])
+        rows.append(
+            {
+                **{k: r[k] for k in ("case", "element", "level", "tolerance", "dofs", "wall_s", "steps")},
+                "cost_s": cost,
+                "true": true,
+                "unc": unc,
+                "estimate": estimate,
+                "reference_level": finest,
+            }
+        )
     rows.sort(key=lambda x: (x["case"], x["element"], x["level"], -x["tolerance"]))
     counts = {"in": 0, "over": 0, "under": 0}
     for case in cases:
@@ -154,6 +172,7 @@ def report(runs: dict[str, Any], refs: dict[str, Any], cases: list[str], element
                 )
             marks = list(group[0]["true"])
             print(f"\n{case}, {element} (errors against references.json, the reference's own uncertainty in brackets)")
+            print("observed orders of the reference ladders: " + "; ".join(orders(refs[case], k) for k in marks))
             print(
                 "| level | tol | dofs | wall [s] | with companion [s] | steps | "
                 + " | ".join(f"true t({k}) | est t({k})" for k in marks)
@@ -168,7 +187,7 @@ def report(runs: dict[str, Any], refs: dict[str, Any], cases: list[str], element
                     ev = est.relative.get(k) if est is not None else None
                     cells.append("-" if tv is None else f"{100 * tv:+.2f} % (±{100 * x['unc'][k]:.1f})")
                     mark = ""
-                    if tv is not None and ev is not None:
+                    if tv is not None and ev is not None and x["level"] < x["reference_level"]:
                         verdict = bracket(abs(tv), x["unc"][k], ev)
                         counts[verdict] += 1
                         mark = {"in": "", "over": " (over)", "under": " (UNDER)"}[verdict]
@@ -182,9 +201,18 @@ def report(runs: dict[str, Any], refs: dict[str, Any], cases: list[str], element
     print(
         f"\nestimates against true errors: {n} (run, density) pairs; {counts['in']} bracketed "
         f"(est/3 <= |true| <= est), {counts['over']} more than 3 times the true error, "
-        f"{counts['under']} below it (each allowed the reference's uncertainty)"
+        f"{counts['under']} below it (each allowed the reference's uncertainty; runs at the reference's finest level not counted)"
     )
     return rows
+
+
+def orders(ref: dict[str, Any], mark: str) -> str:
+    """The observed mesh and time orders of a reference at one density."""
+
+    def fmt(x: float | None) -> str:
+        return "none (not monotone)" if x is None else f"{x:.2f}"
+
+    return f"t({mark}): mesh {fmt(ref['mesh'][mark]['order'])}, time {fmt(ref['time'][mark]['order'])}"
 
 
 def bracket(true: float, uncertainty: float, est: float) -> str:
@@ -198,32 +226,44 @@ def bracket(true: float, uncertainty: float, est: float) -> str:
 
 
 def plot(rows: list[dict[str, Any]], path: Path) -> None:
+    """Largest true error (filled) and largest estimate (open, joined to it)
+    against the wall time with the companion, per case; the line is the
+    Pareto front."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     cases = sorted({x["case"] for x in rows})
-    fig, axes = plt.subplots(1, len(cases), figsize=(4 * len(cases), 3.6), squeeze=False)
-    for ax, case in zip(axes[0], cases):
-        for element, marker in (("hex8", "o"), ("tet10", "s")):
-            group = [x for x in rows if x["case"] == case and x["element"] == element]
+    ncol = 3
+    nrow = (len(cases) + ncol - 1) // ncol
+    fig, axes = plt.subplots(nrow, ncol, figsize=(4.2 * ncol, 3.6 * nrow), squeeze=False)
+    for ax in axes.flat[len(cases) :]:
+        ax.set_visible(False)
+    for ax, case in zip(axes.flat, cases):
+        for element, color in (("hex8", "C0"), ("tet10", "C1")):
+            group = [x for x in rows if x["case"] == case and x["element"] == element and x["estimate"] is not None]
             if not group:
                 continue
-            group = [x for x in group if x["estimate"] is not None]
-            ax.scatter([x["cost_s"] for x in group], [100 * x["worst"] for x in group], marker=marker, label=element)
+            cost = [x["cost_s"] for x in group]
+            true = [100 * x["worst"] for x in group]
+            est = [100 * max(v for v in x["estimate"].relative.values() if v is not None) for x in group]
+            ax.scatter(cost, true, color=color, label=f"{element}: true error")
+            ax.scatter(cost, est, facecolors="none", edgecolors=color, label=f"{element}: estimate")
+            for c, t, e in zip(cost, true, est):
+                ax.plot([c, c], [t, e], color=color, lw=0.6, alpha=0.5)
             front = sorted((x for x in group if x["pareto"]), key=lambda x: x["cost_s"])
-            ax.plot([x["cost_s"] for x in front], [100 * x["worst"] for x in front], "-", alpha=0.6)
+            ax.plot([x["cost_s"] for x in front], [100 * x["worst"] for x in front], "-", color=color, alpha=0.6)
             for x in group:
                 ax.annotate(f"L{x['level']}/{x['tolerance']:g}", (x["cost_s"], 100 * x["worst"]), fontsize=6)
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_title(case)
         ax.set_xlabel("wall time with the companion [s]")
-        ax.set_ylabel("largest error of t(0.8, 0.9, 0.95) [%]")
-        ax.legend(fontsize=7)
+        ax.set_ylabel("largest error of t(rho) [%]")
+        ax.legend(fontsize=6)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
+    fig.savefig(path, dpi=110)
     print(f"wrote {path}")
 
 

@@ -24,8 +24,8 @@ mesh
 time
     The step controller's own accumulated estimate (``time_error_s`` of the
     curve, by magnitude): backward Euler's leading term, exact on smooth
-    creep (a Norton cube) and an upper bound on contact cells, measured 4
-    to 10 times the true time error there (see the README). Tightening the
+    creep (a Norton cube) and an upper bound on the cells, measured 3 to 7
+    times the true time error on sc and bcc (see the README). Tightening the
     tolerance alone cannot gain more than this.
 
 The curve as a whole gets the largest of each over the reported densities.
