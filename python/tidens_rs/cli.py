@@ -126,6 +126,8 @@ def _report(result: Result) -> None:
     for r in MARK_DENSITIES:
         k = f"{r:g}"
         fe = s["times_to_density_s"].get(k)
+        if fe is None and r > s["final_density"]:
+            continue  # beyond the run
         cm = s["continuum_times_to_density_s"].get(k)
         print(f"{r:5.2f} {_fmt(fe):>12} {_pct(est['relative'].get(k)):>10} {_fmt(cm):>16}")
     print(f"error estimate: {est['method']['mesh']}")
@@ -136,8 +138,9 @@ def _report(result: Result) -> None:
         )
         verdict = "reached" if search["reached"] else "NOT reached (the last rung was not accurate enough)"
         print(f"accuracy {_pct(search['target'])} {verdict}: {rungs}; {search['wall_seconds']:.1f} s in all")
+    companion = est["companion_wall_seconds"]
     print(
-        f"wall {s['wall_seconds']:.1f} s, {s['steps']} steps, {s['newton_iterations']} Newton iterations, "
+        f"wall {s['wall_seconds']:.1f} s" + ("" if companion is None else f" (+ {companion:.1f} s for the companion)") + f", {s['steps']} steps, {s['newton_iterations']} Newton iterations, "
         f"{s['degrees_of_freedom']} dofs (mesh level {s['mesh_level']}, tolerance {s['tolerance']:g})"
     )
 
