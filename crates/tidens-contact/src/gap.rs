@@ -109,6 +109,23 @@ pub fn project_from(s: &[f64; 3], x: &[[f64; 3]; 4], mut xi: [f64; 2]) -> [f64; 
     xi
 }
 
+/// Linear shape functions of a 3-node triangle at (xi, eta).
+pub fn triangle_shape(xi: [f64; 2]) -> [f64; 3] {
+    [1.0 - xi[0] - xi[1], xi[0], xi[1]]
+}
+
+/// Parameters (xi, eta) of the foot of `s` on the plane of the triangle `x`
+/// (`x = x_1 + xi (x_2 - x_1) + eta (x_3 - x_1)`; outside the triangle when
+/// `s` is beyond an edge): the closest-point conditions are linear there.
+pub fn project_triangle(s: &[f64; 3], x: &[[f64; 3]; 3]) -> [f64; 2] {
+    let (a1, a2) = (sub(&x[1], &x[0]), sub(&x[2], &x[0]));
+    let d = sub(s, &x[0]);
+    let (m11, m12, m22) = (dot(&a1, &a1), dot(&a1, &a2), dot(&a2, &a2));
+    let (r1, r2) = (dot(&d, &a1), dot(&d, &a2));
+    let det = m11 * m22 - m12 * m12;
+    [(m22 * r1 - m12 * r2) / det, (m11 * r2 - m12 * r1) / det]
+}
+
 /// Gap vector of a tied node: slave point minus the material point of the
 /// master patch at (xi, eta) \[mm\].
 pub fn tie_gap(slave: &[f64; 3], x: &[[f64; 3]; 4], xi: [f64; 2]) -> [f64; 3] {

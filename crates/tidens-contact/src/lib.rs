@@ -30,9 +30,10 @@ pub mod penetration;
 mod surface;
 
 pub use error::ContactError;
-pub use gap::{project, project_from, shape, tie_gap};
+pub use gap::{project, project_from, project_triangle, shape, tie_gap, triangle_shape};
 pub use penetration::{
     Penetration, PenetrationHessian, penetration, penetration_gradient, penetration_hessian,
+    triangle_penetration_hessian,
 };
 pub use surface::ContactSurface;
 

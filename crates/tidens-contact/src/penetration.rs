@@ -92,9 +92,18 @@
 //! A flat facet (`kappa = 0`) touched at `g = 0` keeps only the two middle
 //! terms: its Hessian couples the slave to the facet through the sliding of
 //! the projection point and the rotation of the normal.
+//!
+//! # Flat triangles
+//!
+//! A 3-node triangle is the patch `x = sum_a N_a x_a` with
+//! `N = (1 - xi - eta, xi, eta)`: constant tangents `a_1 = x_2 - x_1`,
+//! `a_2 = x_3 - x_1`, no curvature (`kappa = 0`, so `A = m` and `M = 0`).
+//! The formulas above hold as they are; the term keeps its 15-dof layout,
+//! the fourth facet slot carrying zero weights (`w = t = 0`), so its rows
+//! and columns are zero ([`triangle_penetration_hessian`]).
 
 use crate::TERM_DOFS;
-use crate::gap::{cross, dot, patch, sub};
+use crate::gap::{cross, dot, patch, sub, triangle_shape};
 
 /// The penetration of a slave node and its gradient.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -132,14 +141,42 @@ struct Frame {
 impl Frame {
     fn new(s: &[f64; 3], x: &[[f64; 3]; 4], xi: [f64; 2]) -> Self {
         let p = patch(x, xi);
-        let m = cross(&p.tangents[0], &p.tangents[1]);
+        Self::from_parts(
+            s,
+            p.point,
+            p.shape,
+            p.shape_derivatives,
+            p.tangents,
+            p.twist,
+        )
+    }
+
+    /// The frame of the flat triangle `x` at `xi`, its fourth slot empty.
+    fn triangle(s: &[f64; 3], x: &[[f64; 3]; 3], xi: [f64; 2]) -> Self {
+        let n = triangle_shape(xi);
+        let point = [0, 1, 2].map(|i| n[0] * x[0][i] + n[1] * x[1][i] + n[2] * x[2][i]);
+        let tangents = [sub(&x[1], &x[0]), sub(&x[2], &x[0])];
+        let shape = [n[0], n[1], n[2], 0.0];
+        let shape_derivatives = [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0], [0.0, 0.0]];
+        Self::from_parts(s, point, shape, shape_derivatives, tangents, [0.0; 3])
+    }
+
+    fn from_parts(
+        s: &[f64; 3],
+        point: [f64; 3],
+        shape: [f64; 4],
+        shape_derivatives: [[f64; 2]; 4],
+        tangents: [[f64; 3]; 2],
+        twist: [f64; 3],
+    ) -> Self {
+        let m = cross(&tangents[0], &tangents[1]);
         let norm = dot(&m, &m).sqrt();
-        let d = sub(s, &p.point);
+        let d = sub(s, &point);
         Frame {
-            shape: p.shape,
-            shape_derivatives: p.shape_derivatives,
-            tangents: p.tangents,
-            twist: p.twist,
+            shape,
+            shape_derivatives,
+            tangents,
+            twist,
             normal: m.map(|v| v / norm),
             gap: dot(&d, &m) / norm,
         }
@@ -187,7 +224,23 @@ fn inverse2(a: f64, b: f64, c: f64) -> [[f64; 2]; 2] {
 /// is the projection of `s` on the patch. The Hessian is symmetric to the
 /// bit: its upper triangle is computed and mirrored.
 pub fn penetration_hessian(s: &[f64; 3], x: &[[f64; 3]; 4], xi: [f64; 2]) -> PenetrationHessian {
-    let f = Frame::new(s, x, xi);
+    hessian(&Frame::new(s, x, xi))
+}
+
+/// Penetration \[mm\], gradient and Hessian of the slave point `s` against
+/// the flat triangle of nodes `x` (counter-clockwise about its outward
+/// normal), projected at `xi` (from [`crate::gap::project_triangle`]); in the
+/// 15-dof term layout, the fourth facet slot zero.
+pub fn triangle_penetration_hessian(
+    s: &[f64; 3],
+    x: &[[f64; 3]; 3],
+    xi: [f64; 2],
+) -> PenetrationHessian {
+    hessian(&Frame::triangle(s, x, xi))
+}
+
+/// The second variation at a frame (module docs).
+fn hessian(f: &Frame) -> PenetrationHessian {
     let [a1, a2] = &f.tangents;
     let n = &f.normal;
     let g = f.gap;

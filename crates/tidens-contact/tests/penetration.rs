@@ -8,7 +8,10 @@
 mod dual_penetration;
 
 use tidens_contact::gap::patch;
-use tidens_contact::{penetration_gradient, penetration_hessian, project, project_from};
+use tidens_contact::{
+    penetration_gradient, penetration_hessian, project, project_from, project_triangle,
+    triangle_penetration_hessian, triangle_shape,
+};
 
 type Facet = [[f64; 3]; 4];
 
@@ -212,6 +215,153 @@ fn closed_form_hessian_equals_finite_differences_of_the_gradient() {
                         hess[i][j]
                     );
                 }
+            }
+        }
+    }
+}
+
+/// Flat triangles: a tilted one, a skewed one, and one of a particle surface
+/// at the solver's scale (corners on a sphere of radius 0.05 mm).
+fn triangles() -> [(&'static str, [[f64; 3]; 3]); 3] {
+    let r = 0.05;
+    let on_sphere = |theta: f64, phi: f64| {
+        [
+            r * theta.sin() * phi.cos(),
+            r * theta.sin() * phi.sin(),
+            r * theta.cos(),
+        ]
+    };
+    [
+        (
+            "tilted",
+            [[0.2, 0.2, 0.2], [1.24, 0.98, 0.2], [-0.16, 0.68, 1.0]],
+        ),
+        (
+            "skewed",
+            [[0.0, 0.0, 0.0], [1.0, 0.1, 0.3], [1.6, 0.8, -0.2]],
+        ),
+        (
+            "spherical",
+            [
+                on_sphere(0.60, 0.70),
+                on_sphere(0.60, 0.84),
+                on_sphere(0.72, 0.86),
+            ],
+        ),
+    ]
+}
+
+/// Slave points in front of, on and behind the triangle, projecting inside
+/// it and beyond its edges and corners, at the triangle's scale.
+fn triangle_slaves(x: &[[f64; 3]; 3]) -> Vec<[f64; 3]> {
+    let (a1, a2) = (
+        [0, 1, 2].map(|i| x[1][i] - x[0][i]),
+        [0, 1, 2].map(|i| x[2][i] - x[0][i]),
+    );
+    let n = [
+        a1[1] * a2[2] - a1[2] * a2[1],
+        a1[2] * a2[0] - a1[0] * a2[2],
+        a1[0] * a2[1] - a1[1] * a2[0],
+    ];
+    let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+    let h = largest(a1.iter().chain(a2.iter()).map(|v| v.abs()));
+    let mut out = Vec::new();
+    for (xi, eta) in [
+        (0.2, 0.3),
+        (0.6, 0.35),
+        (-0.2, 0.5),
+        (0.4, -0.3),
+        (1.1, 0.2),
+    ] {
+        for g in [0.1, 0.0, -0.05] {
+            out.push([0, 1, 2].map(|i| x[0][i] + xi * a1[i] + eta * a2[i] + g * h * n[i] / len));
+        }
+    }
+    out
+}
+
+fn triangle_term(v: &[f64; 15]) -> ([f64; 3], [[f64; 3]; 3]) {
+    (
+        [v[0], v[1], v[2]],
+        std::array::from_fn(|a| [v[3 + 3 * a], v[4 + 3 * a], v[5 + 3 * a]]),
+    )
+}
+
+#[test]
+fn triangle_penetration_is_the_signed_distance_to_its_plane() {
+    for (name, x) in triangles() {
+        for s in triangle_slaves(&x) {
+            let xi = project_triangle(&s, &x);
+            let p = triangle_penetration_hessian(&s, &x, xi);
+            // The foot's offset is normal to both edges.
+            let n = triangle_shape(xi);
+            let foot = [0, 1, 2].map(|i| n[0] * x[0][i] + n[1] * x[1][i] + n[2] * x[2][i]);
+            let d = [0, 1, 2].map(|i| s[i] - foot[i]);
+            for e in [1, 2] {
+                let t = [0, 1, 2].map(|i| x[e][i] - x[0][i]);
+                let along = d[0] * t[0] + d[1] * t[1] + d[2] * t[2];
+                assert!(
+                    along.abs() < 1e-13,
+                    "{name} {s:?}: offset along edge {along}"
+                );
+            }
+            // -dp/ds is the unit normal; the penetration is minus the offset along it.
+            let ns = [-p.gradient[0], -p.gradient[1], -p.gradient[2]];
+            let gap = d[0] * ns[0] + d[1] * ns[1] + d[2] * ns[2];
+            assert!(
+                (p.value + gap).abs() < 1e-14,
+                "{name}: {} vs {}",
+                p.value,
+                -gap
+            );
+            assert!((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt() - gap.abs() < 1e-14);
+        }
+    }
+}
+
+#[test]
+fn triangle_gradient_and_hessian_equal_finite_differences() {
+    // The fourth facet slot of the 15-dof term is empty: its rows and
+    // columns are zero. The slave is projected afresh at every perturbed
+    // configuration.
+    let eval = |v: &[f64; 15]| {
+        let (s, x) = triangle_term(v);
+        triangle_penetration_hessian(&s, &x, project_triangle(&s, &x))
+    };
+    for (name, x) in triangles() {
+        let step = 1e-6 * largest(x.iter().flatten().map(|v| v.abs()));
+        for s in triangle_slaves(&x) {
+            let mut v = [0.0; 15];
+            v[..3].copy_from_slice(&s);
+            for a in 0..3 {
+                v[3 + 3 * a..6 + 3 * a].copy_from_slice(&x[a]);
+            }
+            let here = eval(&v);
+            let hmax = largest(here.hessian.iter().flatten().copied());
+            for j in 0..12 {
+                let (mut up, mut down) = (v, v);
+                up[j] += step;
+                down[j] -= step;
+                let (pu, pd) = (eval(&up), eval(&down));
+                let fd = (pu.value - pd.value) / (2.0 * step);
+                assert!(
+                    (fd - here.gradient[j]).abs() < 1e-7,
+                    "{name} {s:?}: dp/du[{j}] {} vs {fd}",
+                    here.gradient[j]
+                );
+                for i in 0..15 {
+                    let fd = (pu.gradient[i] - pd.gradient[i]) / (2.0 * step);
+                    assert!(
+                        (fd - here.hessian[i][j]).abs() <= 1e-7 * hmax,
+                        "{name} {s:?}: H[{i}][{j}] {} vs finite differences {fd}",
+                        here.hessian[i][j]
+                    );
+                    assert_eq!(here.hessian[i][j], here.hessian[j][i]);
+                }
+            }
+            for k in 12..15 {
+                assert_eq!(here.gradient[k], 0.0);
+                assert!(here.hessian[k].iter().all(|&h| h == 0.0));
             }
         }
     }
