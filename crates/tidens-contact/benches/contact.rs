@@ -169,7 +169,7 @@ fn detection(c: &mut Criterion) {
     let slaves: usize = contact.surfaces().iter().map(|s| s.nodes.len()).sum();
     eprintln!(
         "detection: {slaves} slave nodes, {} triangles per search mesh",
-        2 * contact.surfaces()[0].quads.len()
+        2 * contact.surfaces()[0].facets.len()
     );
     let mut g = c.benchmark_group("detection");
     g.throughput(Throughput::Elements(slaves as u64));

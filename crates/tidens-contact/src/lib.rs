@@ -25,6 +25,7 @@
 //!   while Newton iterates.
 
 mod error;
+pub mod facet;
 pub mod gap;
 pub mod penetration;
 mod surface;
@@ -33,9 +34,9 @@ pub use error::ContactError;
 pub use gap::{project, project_from, project_triangle, shape, tie_gap, triangle_shape};
 pub use penetration::{
     Penetration, PenetrationHessian, penetration, penetration_gradient, penetration_hessian,
-    triangle_penetration_hessian,
+    triangle_penetration_gradient, triangle_penetration_hessian,
 };
-pub use surface::ContactSurface;
+pub use surface::{ContactSurface, FacetKind};
 
 use parry3d_f64::math::Vector as PVector;
 use parry3d_f64::query::PointQueryWithLocation;
@@ -255,16 +256,17 @@ impl ParticleContact {
             self.settings.search_distance,
         )?;
         let master = &self.surfaces[m];
-        let outside = |facet: usize| {
-            let xi = project(&p, &master.quads[facet].map(|n| point(x, n)));
-            xi[0].abs().max(xi[1].abs())
+        let outside = |f: usize| {
+            let xi = facet::project_on(master.kind, &p, &master.facets[f].map(|n| point(x, n)));
+            facet::outside(master.kind, xi)
         };
+        let found = master.facet_of_triangle(tri as usize);
         let best = master
-            .ring(tri as usize / 2)
+            .ring(found)
             .iter()
             .map(|&f| (f, outside(f)))
             .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
-            .map_or(tri as usize / 2, |(f, _)| f);
+            .map_or(found, |(f, _)| f);
         Some((best, (proj.point - q).length()))
     }
 
@@ -300,12 +302,13 @@ impl ParticleContact {
     /// from step to step (their patches differ slightly beyond their edges),
     /// and the two equilibria it hops between make the piston chatter.
     pub fn pair(&mut self, x: &[f64]) {
-        let keep = |s: usize, k: usize, m: usize, facet: usize| {
+        let keep = |s: usize, k: usize, m: usize, f: usize| {
+            let kind = self.surfaces[m].kind;
             let p = point(x, self.surfaces[s].nodes[k]);
-            let q = self.surfaces[m].quads[facet].map(|n| point(x, n));
-            let xi = project(&p, &q);
-            let inside = xi[0].abs().max(xi[1].abs()) <= 1.1;
-            let near = penetration(&p, &q, xi) > -self.settings.search_distance;
+            let q = self.surfaces[m].facets[f].map(|n| point(x, n));
+            let xi = facet::project_on(kind, &p, &q);
+            let inside = facet::outside(kind, xi) <= 1.1;
+            let near = facet::penetration_on(kind, &p, &q, xi) > -self.settings.search_distance;
             inside && near
         };
         let pairing: Vec<Vec<Option<(usize, usize)>>> = (0..self.surfaces.len())
@@ -421,7 +424,7 @@ impl ParticleContact {
         facet: usize,
     ) -> ([f64; 3], [[f64; 3]; 4], [usize; TERM_DOFS]) {
         let node = self.surfaces[s].nodes[k];
-        let quad = self.surfaces[m].quads[facet];
+        let quad = self.surfaces[m].facets[facet];
         let mut dofs = [0; TERM_DOFS];
         for i in 0..3 {
             dofs[i] = 3 * node + i;
@@ -444,19 +447,20 @@ impl ParticleContact {
         with_tangent: bool,
     ) -> Option<ContactTerm> {
         let (p, q, dofs) = self.gather(x, s, k, m, facet);
-        let xi = project(&p, &q);
+        let kind = self.surfaces[m].kind;
+        let xi = facet::project_on(kind, &p, &q);
         // Nodes clearly apart from the facet need no derivatives.
         let band = -0.1 * self.settings.search_distance;
-        if self.state[s][k].lambda <= 0.0 && penetration(&p, &q, xi) <= band {
+        if self.state[s][k].lambda <= 0.0 && facet::penetration_on(kind, &p, &q, xi) <= band {
             return None;
         }
         let area = 0.5 * self.surfaces[s].areas[k];
         let eps = self.settings.penalty;
         let (pen, grad, hess) = if with_tangent {
-            let d = penetration_hessian(&p, &q, xi);
+            let d = facet::hessian_on(kind, &p, &q, xi);
             (d.value, d.gradient, Some(d.hessian))
         } else {
-            let d = penetration_gradient(&p, &q, xi);
+            let d = facet::gradient_on(kind, &p, &q, xi);
             (d.value, d.gradient, None)
         };
         let pressure = (self.state[s][k].lambda + eps * pen).max(0.0);
@@ -517,8 +521,9 @@ impl ParticleContact {
         let (p, q, dofs) = self.gather(x, s, k, m, facet);
         let area = 0.5 * self.surfaces[s].areas[k];
         let eps = self.settings.penalty;
-        let gap = tie_gap(&p, &q, xi);
-        let n = shape(xi);
+        let kind = self.surfaces[m].kind;
+        let gap = facet::tie_gap_on(kind, &p, &q, xi);
+        let n = facet::shape_on(kind, xi);
         // d gap / d x: +1 for the slave, -N_a for facet node a.
         let weights = [1.0, -n[0], -n[1], -n[2], -n[3]];
         let traction: [f64; 3] = [0, 1, 2].map(|i| lambda[i] + eps * gap[i]);
@@ -571,7 +576,7 @@ impl ParticleContact {
             active[s][k] = true;
             if let Some((m, facet, xi)) = self.state[s][k].tie {
                 let (p, q, _) = self.gather(x, s, k, m, facet);
-                let gap = tie_gap(&p, &q, xi);
+                let gap = facet::tie_gap_on(self.surfaces[m].kind, &p, &q, xi);
                 for i in 0..3 {
                     self.state[s][k].tie_lambda[i] += eps * gap[i];
                 }

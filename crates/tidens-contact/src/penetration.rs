@@ -214,6 +214,16 @@ pub fn penetration_gradient(s: &[f64; 3], x: &[[f64; 3]; 4], xi: [f64; 2]) -> Pe
     }
 }
 
+/// Penetration and its gradient against the flat triangle `x` (projected
+/// at `xi`), in the 15-dof term layout with the fourth facet slot zero.
+pub fn triangle_penetration_gradient(s: &[f64; 3], x: &[[f64; 3]; 3], xi: [f64; 2]) -> Penetration {
+    let f = Frame::triangle(s, x, xi);
+    Penetration {
+        value: -f.gap,
+        gradient: f.gradient(),
+    }
+}
+
 /// Inverse of the symmetric 2x2 matrix `[[a, b], [b, c]]`.
 fn inverse2(a: f64, b: f64, c: f64) -> [[f64; 2]; 2] {
     let det = a * c - b * b;

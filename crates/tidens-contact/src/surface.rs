@@ -1,10 +1,22 @@
 //! A particle's contact surface: its nodes, their tributary areas, its
-//! bilinear quad facets, and the triangles parry searches (two per quad).
+//! facets (bilinear quads, or flat triangles), and the triangles parry
+//! searches (two per quad, the facet itself for a triangle).
 
 use crate::error::ContactError;
 use parry3d_f64::math::Vector as PVector;
 use parry3d_f64::shape::TriMesh;
 use serde::{Deserialize, Serialize};
+
+/// The shape of a surface's facets.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum FacetKind {
+    /// Bilinear quadrilaterals (the faces of hexahedra).
+    #[default]
+    Quad,
+    /// Flat 3-node triangles (the 6-node faces of quadratic tetrahedra,
+    /// each split into its four corner and middle triangles).
+    Triangle,
+}
 
 /// The curved surface of one particle.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -13,13 +25,16 @@ pub struct ContactSurface {
     pub nodes: Vec<usize>,
     /// Tributary area of each surface node in the reference state \[mm^2\].
     pub areas: Vec<f64>,
-    /// Quad facets by global node id (counter-clockwise about the outward
-    /// normal).
-    pub quads: Vec<[usize; 4]>,
+    /// Facets by global node id (counter-clockwise about the outward
+    /// normal); a triangle repeats its third node in the fourth place.
+    pub facets: Vec<[usize; 4]>,
+    /// The shape of the facets.
+    #[serde(default)]
+    pub kind: FacetKind,
     /// Triangles for the search, by index into `nodes`: triangles `2 q` and
-    /// `2 q + 1` cover quad `q`.
+    /// `2 q + 1` cover quad `q`; triangle `t` is triangle facet `t`.
     triangles: Vec<[u32; 3]>,
-    /// The quads around each quad (sharing a node with it, itself included).
+    /// The facets around each facet (sharing a node with it, itself included).
     ring: Vec<Vec<usize>>,
 }
 
@@ -27,7 +42,26 @@ impl ContactSurface {
     /// The surface made of boundary quads `quads` (global node ids, outward
     /// right-hand normal) of a mesh with reference coordinates `nodes0`.
     pub fn from_quads(quads: &[[usize; 4]], nodes0: &[[f64; 3]]) -> Result<Self, ContactError> {
-        let mut nodes: Vec<usize> = quads.iter().flatten().copied().collect();
+        Self::build(quads.to_vec(), FacetKind::Quad, nodes0)
+    }
+
+    /// The surface made of flat boundary triangles `triangles` (global node
+    /// ids, outward right-hand normal) of a mesh with reference coordinates
+    /// `nodes0`.
+    pub fn from_triangles(
+        triangles: &[[usize; 3]],
+        nodes0: &[[f64; 3]],
+    ) -> Result<Self, ContactError> {
+        let facets = triangles.iter().map(|t| [t[0], t[1], t[2], t[2]]).collect();
+        Self::build(facets, FacetKind::Triangle, nodes0)
+    }
+
+    fn build(
+        facets: Vec<[usize; 4]>,
+        kind: FacetKind,
+        nodes0: &[[f64; 3]],
+    ) -> Result<Self, ContactError> {
+        let mut nodes: Vec<usize> = facets.iter().flatten().copied().collect();
         nodes.sort_unstable();
         nodes.dedup();
         if let Some(&n) = nodes.iter().find(|&&n| n >= nodes0.len()) {
@@ -37,26 +71,38 @@ impl ContactSurface {
         }
         let index = |n: usize| nodes.binary_search(&n).unwrap_or(0);
         let mut areas = vec![0.0; nodes.len()];
-        let mut triangles = Vec::with_capacity(2 * quads.len());
-        for q in quads {
-            // Half the cross product of the diagonals: the area of the quad,
-            // the same whichever diagonal splits it; a quarter to each node.
+        let mut triangles = Vec::with_capacity(2 * facets.len());
+        for q in &facets {
             let p = q.map(|n| nodes0[n]);
-            let area = 0.5 * norm(&cross(&sub(&p[2], &p[0]), &sub(&p[3], &p[1])));
-            for &n in q {
-                areas[index(n)] += 0.25 * area;
-            }
-            for t in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
-                triangles.push(t.map(|n| index(n) as u32));
+            match kind {
+                FacetKind::Quad => {
+                    // Half the cross product of the diagonals: the area of
+                    // the quad, the same whichever diagonal splits it; a
+                    // quarter to each node.
+                    let area = 0.5 * norm(&cross(&sub(&p[2], &p[0]), &sub(&p[3], &p[1])));
+                    for &n in q {
+                        areas[index(n)] += 0.25 * area;
+                    }
+                    for t in [[q[0], q[1], q[2]], [q[0], q[2], q[3]]] {
+                        triangles.push(t.map(|n| index(n) as u32));
+                    }
+                }
+                FacetKind::Triangle => {
+                    let area = 0.5 * norm(&cross(&sub(&p[1], &p[0]), &sub(&p[2], &p[0])));
+                    for &n in &q[..3] {
+                        areas[index(n)] += area / 3.0;
+                    }
+                    triangles.push([q[0], q[1], q[2]].map(|n| index(n) as u32));
+                }
             }
         }
         let mut around: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
-        for (qi, q) in quads.iter().enumerate() {
+        for (qi, q) in facets.iter().enumerate() {
             for &n in q {
                 around[index(n)].push(qi);
             }
         }
-        let ring = quads
+        let ring = facets
             .iter()
             .map(|q| {
                 let mut r: Vec<usize> = q
@@ -71,13 +117,22 @@ impl ContactSurface {
         Ok(Self {
             nodes,
             areas,
-            quads: quads.to_vec(),
+            facets,
+            kind,
             triangles,
             ring,
         })
     }
 
-    /// The quads sharing a node with quad `q` (itself included).
+    /// The facet that search triangle `t` lies on.
+    pub fn facet_of_triangle(&self, t: usize) -> usize {
+        match self.kind {
+            FacetKind::Quad => t / 2,
+            FacetKind::Triangle => t,
+        }
+    }
+
+    /// The facets sharing a node with facet `q` (itself included).
     pub fn ring(&self, q: usize) -> &[usize] {
         &self.ring[q]
     }
@@ -96,7 +151,7 @@ impl ContactSurface {
     }
 
     /// The surface as a parry `TriMesh` in the configuration `x`; triangle
-    /// `t` lies on quad `t / 2`.
+    /// `t` lies on facet [`Self::facet_of_triangle`]`(t)`.
     pub fn trimesh(&self, x: &[f64]) -> Option<TriMesh> {
         let vertices = self
             .nodes

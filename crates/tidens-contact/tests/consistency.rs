@@ -1,6 +1,7 @@
 //! The contact force is the gradient of the contact energy and the tangent
 //! its Hessian: both checked against finite differences on two curved
-//! patches pressed into each other.
+//! patches pressed into each other, meshed with bilinear quads and with flat
+//! triangles.
 
 use tidens_contact::{ContactMode, ContactSettings, ContactSurface, ParticleContact};
 
@@ -60,13 +61,39 @@ fn total_force(c: &ParticleContact, x: &[f64]) -> Vec<f64> {
     f
 }
 
+/// Each quad split into two triangles, counter-clockwise like it.
+fn split(quads: &[[usize; 4]]) -> Vec<[usize; 3]> {
+    quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect()
+}
+
 #[test]
 fn contact_tangent_equals_finite_differences_of_the_force() {
     let (nodes, lower, upper) = patches(0.06);
-    let surfaces = vec![
-        ContactSurface::from_quads(&lower, &nodes).unwrap(),
-        ContactSurface::from_quads(&upper, &nodes).unwrap(),
-    ];
+    check_tangent(
+        vec![
+            ContactSurface::from_quads(&lower, &nodes).unwrap(),
+            ContactSurface::from_quads(&upper, &nodes).unwrap(),
+        ],
+        &nodes,
+    );
+}
+
+#[test]
+fn triangle_contact_tangent_equals_finite_differences_of_the_force() {
+    let (nodes, lower, upper) = patches(0.06);
+    check_tangent(
+        vec![
+            ContactSurface::from_triangles(&split(&lower), &nodes).unwrap(),
+            ContactSurface::from_triangles(&split(&upper), &nodes).unwrap(),
+        ],
+        &nodes,
+    );
+}
+
+fn check_tangent(surfaces: Vec<ContactSurface>, nodes: &[[f64; 3]]) {
     let mut contact = ParticleContact::new(
         surfaces,
         ContactSettings {

@@ -172,7 +172,7 @@ impl Assembler {
             let mut dofs: Vec<usize> = t.dofs[..3].to_vec();
             for &f in master.ring(t.master.1) {
                 dofs.extend(
-                    master.quads[f]
+                    master.facets[f]
                         .iter()
                         .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]),
                 );
