@@ -30,11 +30,11 @@ PRESETS: dict[str, tuple[Callable[[], td.Cell], float]] = {
 
 
 def quick(cell: td.Cell, **kwargs: object) -> td.Case:
+    kwargs.setdefault("solver", td.SolverSettings(mesh_level=1, tolerance=0.05))
     return td.Case(
         cell=cell,
         material=td.materials.TI64_CREEP_1293K,
         stress_mpa=10.0,
-        solver=td.SolverSettings(mesh_level=1, tolerance=0.05),
         **kwargs,  # type: ignore[arg-type]
     )
 
@@ -205,12 +205,14 @@ def pressed() -> Press:
     return press
 
 
-@pytest.mark.parametrize(("name", "until"), [("bcc", 0.72), ("fcc", 0.75), ("sc2", 0.62)])
+@pytest.mark.parametrize(
+    ("name", "until", "element"), [("bcc", 0.72, "hex8"), ("fcc", 0.75, "hex8"), ("sc2", 0.62, "hex8"), ("bcc", 0.72, "tet10")]
+)
 def test_every_packing_densifies_with_contact_pressure_and_no_penetration(
-    pressed: Press, name: str, until: float
+    pressed: Press, name: str, until: float, element: str
 ) -> None:
     cell = td.cells.by_name(name)
-    r = pressed(name, until)
+    r = pressed(name, until) if element == "hex8" else pressed(name, until, solver=td.SolverSettings(mesh_level=1, tolerance=0.05, element=element))
     assert r.status == "reached_density"
     assert np.all(np.diff(r.rel_density) >= -1e-12)
     assert r.curve["max_penetration_mm"].max() < 1e-4 * R

@@ -59,9 +59,9 @@ class SolverSettings:
     element
         ``hex8``: the 8-node mean-dilatation hexahedron (default); ``tet10``:
         the 10-node tetrahedron with one pressure, 6 per hexahedron of the
-        same level with mid-edge nodes on the true surface (single-particle
-        cells and blocks; level L in tet10 has as many dofs as level L + 2 in
-        hex8).
+        same level with mid-edge nodes on the true surface (level L in tet10
+        has as many dofs as level L + 2 in hex8; particles touch on the flat
+        triangles of their 6-node faces).
     max_strain_increment
         Largest equivalent plastic strain increment per step at any Gauss
         point (a robustness limit).

@@ -60,7 +60,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--tolerance", type=float, help=f"time-integration accuracy, relative error of t(rho) (default {DEFAULT_TOLERANCE:g})")
     g.add_argument("--grading", type=float, default=_DEFAULTS.grading, help=f"element-size ratio toward the contact points (default {_DEFAULTS.grading:g})")
     g.add_argument("--exact-volume", action=argparse.BooleanOptionalAction, default=_DEFAULTS.exact_volume, help=f"move each particle's surface nodes outward (contact points kept on the surface) so that its mesh has the exact spheroid volume (default {'on' if _DEFAULTS.exact_volume else 'off'})")
-    g.add_argument("--element", choices=ELEMENTS, default=_DEFAULTS.element, help=f"hex8: mean-dilatation hexahedra; tet10: quadratic tetrahedra with one pressure, cut from the same blocks (single-particle cells only); default {_DEFAULTS.element}")
+    g.add_argument("--element", choices=ELEMENTS, default=_DEFAULTS.element, help=f"hex8: mean-dilatation hexahedra; tet10: quadratic tetrahedra with one pressure, cut from the same blocks; default {_DEFAULTS.element}")
     g.add_argument("--no-error-estimate", dest="error_estimate", action="store_false", help="skip the coarse companion run (one mesh level down at twice the tolerance, a fifth to a third of the cost) that gives the error estimate")
     g.add_argument("--max-steps", type=int, default=_DEFAULTS.max_steps, help=f"step limit (default {_DEFAULTS.max_steps})")
     g = p.add_argument_group("output")

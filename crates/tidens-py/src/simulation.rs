@@ -47,17 +47,18 @@ fn contact_mode(name: &str) -> PyResult<ContactMode> {
 /// The particle index of every element of a scene (-1 for an element of no
 /// particle, as in the verification blocks).
 fn element_particles(scene: &Scene) -> Vec<i64> {
-    let mut owner = vec![-1; scene.mesh.elements.len()];
+    let count = match &scene.tet_mesh {
+        Some(t) => t.elements.len(),
+        None => scene.mesh.elements.len(),
+    };
+    let mut owner = vec![-1; count];
+    // The particles' element ranges count in the scene's body mesh.
     for (k, p) in scene.particles.iter().enumerate() {
         let (first, count) = p.elements;
         // Particle counts are tiny: the cast cannot wrap.
         owner[first..first + count].fill(k as i64);
     }
-    match scene.element() {
-        ElementKind::Hex8 => owner,
-        // Tetrahedron 6 e + k is a piece of hexahedron e.
-        ElementKind::Tet10 => owner.iter().flat_map(|&o| [o; 6]).collect(),
-    }
+    owner
 }
 
 /// The Python names of the elements, the default first.

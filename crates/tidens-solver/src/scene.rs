@@ -7,7 +7,8 @@ use crate::error::SolverError;
 use serde::{Deserialize, Serialize};
 use tidens_fem::ElementKind;
 use tidens_mesh::{
-    BoundaryFace, FaceKind, HexMesh, OctantSpec, TetMesh, divisions_for_level, project_to_spheroid,
+    BoundaryFace, FaceKind, HexMesh, OctantSpec, TetBoundaryFace, TetMesh, divisions_for_level,
+    project_to_spheroid,
 };
 
 /// Finest mesh level: level 6 needs about 2.5 GB for the sparse factor of the
@@ -70,8 +71,14 @@ pub struct Particle {
     pub nodes: (usize, usize),
     /// First element and number of elements.
     pub elements: (usize, usize),
-    /// Curved boundary quads (scene node ids, outward right-hand normal).
+    /// Curved boundary quads of the hexahedra (scene node ids, outward
+    /// right-hand normal).
     pub surface: Vec<[usize; 4]>,
+    /// In a tet10 scene, the curved boundary as flat triangles (each 6-node
+    /// face split into its three corner triangles and its middle one;
+    /// nodes of the tetrahedral mesh, outward right-hand normal); empty in a
+    /// hex8 scene. `nodes` and `elements` then count in the tetrahedral mesh.
+    pub triangles: Vec<[usize; 3]>,
 }
 
 /// A meshed problem: the box, whether the lateral die walls exist, and the
@@ -166,6 +173,7 @@ impl Scene {
                 nodes: (n0, piece.nodes.len()),
                 elements: (e0, piece.elements.len()),
                 surface,
+                triangles: Vec::new(),
             });
         }
         check_no_overlap(cell, &mesh, &particles)?;
@@ -183,10 +191,11 @@ impl Scene {
     }
 
     /// The scene meshed with elements of `kind`: hexahedra as built, or
-    /// 10-node tetrahedra cut from them, with the mid-edge nodes of curved
-    /// faces on the spheroid. Particle-particle contact works on the
-    /// hexahedra's quad facets only, so tetrahedra are for single-particle
-    /// cells and blocks.
+    /// 10-node tetrahedra cut from them (6 per hexahedron), particle by
+    /// particle, with the mid-edge nodes of curved faces on the particle's
+    /// spheroid. In a tet10 scene each particle's `nodes` and `elements`
+    /// count in the tetrahedral mesh and its `triangles` are its contact
+    /// surface.
     ///
     /// Tetrahedra are always cut from hexahedra with their surface nodes on
     /// the spheroid: a cell meshed with `exact_volume` is meshed again
@@ -197,13 +206,6 @@ impl Scene {
             self.tet_mesh = None;
             return Ok(self);
         }
-        if self.particles.len() > 1 {
-            return Err(SolverError::Unsupported(
-                "tet10 meshes are available for single-particle cells (sc) and blocks; \
-                 particle-particle contact needs the hex8 quad facets"
-                    .into(),
-            ));
-        }
         if let Some(options) = self.mesh_options.filter(|o| o.exact_volume)
             && let Some(cell) = self.cell.take()
         {
@@ -213,24 +215,52 @@ impl Scene {
             };
             self = Scene::from_cell(&cell, &on_surface)?;
         }
-        let surface = self
-            .cell
-            .as_ref()
-            .and_then(|cell| cell.octants.first().map(|o| (o.clone(), cell.lengths)));
-        self.tet_mesh = Some(match surface {
-            Some((octant, lengths)) => {
-                let centre = octant.centre(lengths);
-                TetMesh::from_hex_with_surface(&self.mesh, |p| {
-                    let q = project_to_spheroid(
-                        [p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]],
-                        octant.a,
-                        octant.c,
-                    );
-                    [q[0] + centre[0], q[1] + centre[1], q[2] + centre[2]]
-                })?
+        let Some(cell) = self.cell.clone() else {
+            self.tet_mesh = Some(TetMesh::from_hex(&self.mesh)?);
+            return Ok(self);
+        };
+        let mut tet = TetMesh {
+            nodes: Vec::new(),
+            elements: Vec::new(),
+            boundary: Vec::new(),
+        };
+        for particle in &mut self.particles {
+            let octant = &cell.octants[particle.octant];
+            let centre = octant.centre(cell.lengths);
+            let piece = TetMesh::from_hex_with_surface(&hex_piece(&self.mesh, particle), |p| {
+                let q = project_to_spheroid(
+                    [p[0] - centre[0], p[1] - centre[1], p[2] - centre[2]],
+                    octant.a,
+                    octant.c,
+                );
+                [q[0] + centre[0], q[1] + centre[1], q[2] + centre[2]]
+            })?;
+            let (n0, e0) = (tet.nodes.len(), tet.elements.len());
+            tet.nodes.extend_from_slice(&piece.nodes);
+            tet.elements
+                .extend(piece.elements.iter().map(|el| el.map(|n| n + n0)));
+            particle.triangles.clear();
+            for f in &piece.boundary {
+                let nodes = f.nodes.map(|n| n + n0);
+                if f.kind == FaceKind::Curved {
+                    let [c0, c1, c2, m01, m12, m20] = nodes;
+                    particle.triangles.extend([
+                        [c0, m01, m20],
+                        [m01, c1, m12],
+                        [m20, m12, c2],
+                        [m01, m12, m20],
+                    ]);
+                }
+                tet.boundary.push(TetBoundaryFace {
+                    nodes,
+                    element: f.element + e0,
+                    kind: f.kind,
+                });
             }
-            None => TetMesh::from_hex(&self.mesh)?,
-        });
+            particle.nodes = (n0, piece.nodes.len());
+            particle.elements = (e0, piece.elements.len());
+        }
+        self.tet_mesh = Some(tet);
         Ok(self)
     }
 
@@ -296,6 +326,30 @@ impl Scene {
             cell: None,
             mesh_options: None,
         })
+    }
+}
+
+/// The hexahedra of one particle as a mesh of their own (node and element
+/// numbers from 0).
+fn hex_piece(mesh: &HexMesh, particle: &Particle) -> HexMesh {
+    let (n0, nc) = particle.nodes;
+    let (e0, ec) = particle.elements;
+    HexMesh {
+        nodes: mesh.nodes[n0..n0 + nc].to_vec(),
+        elements: mesh.elements[e0..e0 + ec]
+            .iter()
+            .map(|el| el.map(|n| n - n0))
+            .collect(),
+        boundary: mesh
+            .boundary
+            .iter()
+            .filter(|f| (e0..e0 + ec).contains(&f.element))
+            .map(|f| BoundaryFace {
+                nodes: f.nodes.map(|n| n - n0),
+                element: f.element - e0,
+                kind: f.kind,
+            })
+            .collect(),
     }
 }
 

@@ -13,6 +13,7 @@ use crate::scene::Scene;
 use crate::settings::Settings;
 use crate::step_control::StepController;
 use tidens_contact::{ContactEvaluation, ContactSettings, ContactSurface, ParticleContact};
+use tidens_fem::ElementKind;
 use tidens_fem::{Body, ElementFields, SparseSystem};
 use tidens_material::Material;
 
@@ -92,7 +93,10 @@ fn particle_contact(
     let surfaces = scene
         .particles
         .iter()
-        .map(|p| ContactSurface::from_quads(&p.surface, &scene.mesh.nodes))
+        .map(|p| match scene.element() {
+            ElementKind::Hex8 => ContactSurface::from_quads(&p.surface, scene.nodes()),
+            ElementKind::Tet10 => ContactSurface::from_triangles(&p.triangles, scene.nodes()),
+        })
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| SolverError::Unsupported(e.to_string()))?;
     let (count, area) = surfaces

@@ -1,11 +1,22 @@
 //! Particle-particle contact (issue: contact between particles, every cell).
 
+use tidens_fem::ElementKind;
 use tidens_solver::{
     Cell, ContactMode, LoadHistory, MeshOptions, Octant, Preset, Scene, Settings, Simulation,
     Status,
 };
 
 fn press(cell: &Cell, level: u32, until_density: f64, mode: ContactMode) -> (Scene, Simulation) {
+    press_with(cell, level, until_density, mode, ElementKind::Hex8)
+}
+
+fn press_with(
+    cell: &Cell,
+    level: u32,
+    until_density: f64,
+    mode: ContactMode,
+    element: ElementKind,
+) -> (Scene, Simulation) {
     let scene = Scene::from_cell(
         cell,
         &MeshOptions {
@@ -14,6 +25,8 @@ fn press(cell: &Cell, level: u32, until_density: f64, mode: ContactMode) -> (Sce
             ..MeshOptions::default()
         },
     )
+    .unwrap()
+    .with_element(element)
     .unwrap();
     let mut settings = Settings::new(LoadHistory {
         stress: 15.0,
@@ -49,9 +62,26 @@ fn stacked_pair(radius: f64) -> Cell {
 /// that contact replaces.
 #[test]
 fn identical_octants_pressed_along_an_axis_deform_mirror_symmetrically() {
+    pair_deforms_mirror_symmetrically(ElementKind::Hex8);
+}
+
+/// The same with quadratic tetrahedra, in contact on the flat triangles of
+/// their 6-node faces.
+#[test]
+fn identical_tet10_octants_pressed_along_an_axis_deform_mirror_symmetrically() {
+    pair_deforms_mirror_symmetrically(ElementKind::Tet10);
+}
+
+fn pair_deforms_mirror_symmetrically(element: ElementKind) {
     let r = 0.05;
     let level: u32 = std::env::var("PAIR_LEVEL").map_or(1, |v| v.parse().unwrap());
-    let (scene, mut pair) = press(&stacked_pair(r), level, 0.62, ContactMode::Frictionless);
+    let (scene, mut pair) = press_with(
+        &stacked_pair(r),
+        level,
+        0.62,
+        ContactMode::Frictionless,
+        element,
+    );
     let mut worst_pen: f64 = 0.0;
     let status = pair
         .run(|p| {
@@ -64,10 +94,26 @@ fn identical_octants_pressed_along_an_axis_deform_mirror_symmetrically() {
     let f = pair.fields();
     let lz = scene.lengths[2] + pair.curve().last().unwrap().piston_displacement;
     let (bottom, top) = (&scene.particles[0], &scene.particles[1]);
-    // Node k of the top particle is the mirror image of node k of the bottom one.
+    // Each node of the bottom particle and the node of the top one at its
+    // mirror image in the reference configuration stay mirror images.
+    let x0 = scene.nodes();
+    let lz0 = scene.lengths[2];
+    let image = |n: usize| {
+        let p = x0[n];
+        (top.nodes.0..top.nodes.0 + top.nodes.1)
+            .min_by(|&a, &b| {
+                let d = |m: usize| {
+                    let q = x0[m];
+                    (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] + q[2] - lz0).powi(2)
+                };
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap()
+    };
     let mut asym: f64 = 0.0;
     for k in 0..bottom.nodes.1 {
-        let (p, q) = (f.points[bottom.nodes.0 + k], f.points[top.nodes.0 + k]);
+        let n = bottom.nodes.0 + k;
+        let (p, q) = (f.points[n], f.points[image(n)]);
         asym = asym
             .max((p[0] - q[0]).abs())
             .max((p[1] - q[1]).abs())
@@ -88,11 +134,12 @@ fn identical_octants_pressed_along_an_axis_deform_mirror_symmetrically() {
         "contact surface off the mid-plane by {flat:e} mm"
     );
     // Against the sc cell on the same mesh: the contact replaces its mirror plane.
-    let (_, mut sc) = press(
+    let (_, mut sc) = press_with(
         &Cell::sc(r, 1.0).unwrap(),
         1,
         0.62,
         ContactMode::Frictionless,
+        element,
     );
     sc.run(|_| true).unwrap();
     let t_at = |sim: &Simulation, rho: f64| {
@@ -114,8 +161,18 @@ fn identical_octants_pressed_along_an_axis_deform_mirror_symmetrically() {
 /// particle is in equilibrium under contact and plane forces.
 #[test]
 fn contact_force_balances_the_piston_force_at_every_step() {
+    contact_force_balances(ElementKind::Hex8);
+}
+
+/// The same with quadratic tetrahedra.
+#[test]
+fn tet10_contact_force_balances_the_piston_force_at_every_step() {
+    contact_force_balances(ElementKind::Tet10);
+}
+
+fn contact_force_balances(element: ElementKind) {
     let cell = Cell::bcc(0.05, 1.0).unwrap();
-    let (scene, sim) = press(&cell, 1, 0.72, ContactMode::Frictionless);
+    let (scene, sim) = press_with(&cell, 1, 0.72, ContactMode::Frictionless, element);
     // Balance holds to what Newton leaves: converge it well below the bound
     // checked (the default leaves 1e-4 of the piston force per equation).
     let mut settings = sim.settings().clone();
