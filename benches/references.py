@@ -40,7 +40,7 @@ from typing import Any
 
 import tidens_rs as td
 from speed_cases import CASES, MARKS, case_of
-from tidens_rs.estimate import LEVEL_DIVISIONS as DIVISIONS
+from tidens_rs._core import LEVEL_DIVISIONS as DIVISIONS
 
 HERE = Path(__file__).resolve().parent
 

@@ -23,6 +23,7 @@ __all__ = [
     "DEFAULT_SIZE_RATIO",
     "SOLVER_DEFAULTS",
     "ELEMENTS",
+    "LEVEL_DIVISIONS",
 ]
 
 __version__: str
@@ -31,6 +32,7 @@ CONTACT_MODES: list[str]
 DEFAULT_SIZE_RATIO: float
 SOLVER_DEFAULTS: dict[str, Any]
 ELEMENTS: list[str]
+LEVEL_DIVISIONS: dict[int, int]
 
 _Octant: TypeAlias = tuple[tuple[bool, bool, bool], float, float]
 

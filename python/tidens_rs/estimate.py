@@ -41,8 +41,9 @@ from typing import Any
 
 import numpy as np
 
-# Inner-cube divisions of the mesh levels (element size ~ 1 / divisions).
-LEVEL_DIVISIONS = {1: 4, 2: 6, 3: 8, 4: 11, 5: 16, 6: 23}
+# The core's inner-cube divisions of each mesh level (element size ~ 1 / divisions).
+from ._core import LEVEL_DIVISIONS
+
 # Order assumed for the Richardson factor of the mesh part.
 MESH_ORDER = 2.0
 # Half-width in rho of the window over which the level difference is taken.

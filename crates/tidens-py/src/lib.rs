@@ -54,6 +54,12 @@ mod _core {
             .map(|(name, _)| *name)
             .collect();
         m.add("ELEMENTS", elements)?;
+        // Inner-cube divisions of each mesh level (element size ~ 1 / divisions).
+        let divisions = (1..=tidens_solver::MAX_MESH_LEVEL)
+            .map(|level| Ok((level, tidens_mesh::divisions_for_level(level)?)))
+            .collect::<Result<std::collections::BTreeMap<u32, usize>, tidens_mesh::MeshError>>()
+            .map_err(|e| pyo3::exceptions::PyValueError::new_err(e.to_string()))?;
+        m.add("LEVEL_DIVISIONS", divisions)?;
         Ok(())
     }
 }

@@ -200,8 +200,16 @@ impl Scene {
     /// Tetrahedra are always cut from hexahedra with their surface nodes on
     /// the spheroid: a cell meshed with `exact_volume` is meshed again
     /// without it, and `mesh` and `mesh_options` then describe those
-    /// hexahedra.
+    /// hexahedra. A tet10 scene of a cell can be turned back into hexahedra
+    /// (or tetrahedra again): it is meshed afresh from the cell.
     pub fn with_element(mut self, kind: ElementKind) -> Result<Scene, SolverError> {
+        // The particles of a tet10 scene count in its tetrahedra: start again
+        // from the cell's hexahedra.
+        if self.tet_mesh.is_some()
+            && let (Some(cell), Some(options)) = (self.cell.clone(), self.mesh_options)
+        {
+            self = Scene::from_cell(&cell, &options)?;
+        }
         if kind == ElementKind::Hex8 {
             self.tet_mesh = None;
             return Ok(self);
@@ -468,6 +476,32 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A bcc scene turned into tetrahedra and back is the hexahedral scene
+    /// again, and its particles' ranges tile the body mesh either way.
+    #[test]
+    fn element_changes_keep_the_particles_consistent() {
+        let cell = Cell::bcc(0.05, 1.0).unwrap();
+        let hex = Scene::from_cell(&cell, &exact(1, 1.0)).unwrap();
+        let tet = hex.clone().with_element(ElementKind::Tet10).unwrap();
+        let tiles = |scene: &Scene, nodes: usize, elements: usize| {
+            let (mut n, mut e) = (0, 0);
+            for p in &scene.particles {
+                assert_eq!((p.nodes.0, p.elements.0), (n, e));
+                n += p.nodes.1;
+                e += p.elements.1;
+            }
+            assert_eq!((n, e), (nodes, elements));
+        };
+        let t = tet.tet_mesh.as_ref().unwrap();
+        tiles(&tet, t.nodes.len(), t.elements.len());
+        assert!(tet.particles.iter().all(|p| !p.triangles.is_empty()));
+        let twice = tet.clone().with_element(ElementKind::Tet10).unwrap();
+        assert_eq!(twice.tet_mesh, tet.tet_mesh);
+        let back = tet.with_element(ElementKind::Hex8).unwrap();
+        tiles(&back, back.mesh.nodes.len(), back.mesh.elements.len());
+        assert_eq!(back.tet_mesh, None);
     }
 
     /// Tetrahedra keep their corners on the spheroid: `exact_volume` does
