@@ -558,7 +558,7 @@ def run_tidens(case: str, level: int, tolerance: float, work: Path) -> dict[str,
     spec = CASES[case]
     out = work / f"tidens_{case}_L{level}_tol{tolerance:g}"
     cmd = ["tidens", "run", "--cell", spec.cell, "--stress", f"{spec.stress_mpa:g}", "--until-density", f"{UNTIL_DENSITY:g}"]
-    cmd += ["--mesh-level", str(level), "--tolerance", f"{tolerance:g}", "--no-error-estimate", "--no-plot", "--quiet", "--out", str(out)]
+    cmd += ["--mesh-level", str(level), "--tolerance", f"{tolerance:g}", "--no-error-estimate", "--no-plot", "--quiet", "--overwrite", "--out", str(out)]
     t0 = time.perf_counter()
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL, env=one_thread_env())
     wall = time.perf_counter() - t0

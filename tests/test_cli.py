@@ -103,11 +103,13 @@ def test_bcc_run_writes_contact_pressure_and_particles(tmp_path: Path) -> None:
 
 def test_cell_file_from_the_command_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     cell = tmp_path / "overlap.toml"
-    cell.write_text('lengths_mm = [0.1, 0.1, 0.1]\n'
+    cell.write_text('lengths_mm = [0.1, 0.1, 0.06]\n'
                     '[[octants]]\ncorner = "000"\na = 0.06\nc = 0.06\n'
                     '[[octants]]\ncorner = "100"\na = 0.06\nc = 0.06\n')
     args = ["run", "--cell-file", str(cell), "--stress", "10", "--until-density", "0.9", "--out", str(tmp_path / "o"), *QUICK]
-    assert main(args) == 2
+    with pytest.raises(SystemExit) as e:
+        main(args)
+    assert e.value.code == 2
     assert "octants 0 and 1 overlap" in capsys.readouterr().err
     cell.write_text('lengths_mm = [0.1, 0.1, 0.1]\n[[octants]]\ncorner = [true, false]\na = 0.06\nc = 0.06\n')
     with pytest.raises(SystemExit) as e:

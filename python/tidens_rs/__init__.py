@@ -22,6 +22,7 @@ from ._core import (
 )
 from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings
 from .continuum import ContinuumModel
+from .io import OutputError
 from .result import Result
 from .snapshot import Snapshot
 
@@ -34,6 +35,7 @@ __all__ = [
     "ContinuumModel",
     "ConvergenceError",
     "Material",
+    "OutputError",
     "Result",
     "Simulation",
     "Snapshot",

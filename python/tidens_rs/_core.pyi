@@ -17,6 +17,7 @@ __all__ = [
     "TidensError",
     "UnsupportedError",
     "tmp_creep_coefficient",
+    "check_parameters",
     "__version__",
     "PRESET_NAMES",
     "CONTACT_MODES",
@@ -49,6 +50,32 @@ class UnsupportedError(TidensError):
 
 def tmp_creep_coefficient(dv_over_v: float, cycle_s: float, sigma0_mpa: float, n: float) -> float:
     """Norton coefficient C [MPa^-1 s^-1] of transformation mismatch plasticity."""
+
+def check_parameters(
+    *,
+    stress_mpa: float = 1.0,
+    knockdown: float = 1.0,
+    ramp_time_s: float = 1.0,
+    until_density: float | None = None,
+    until_time_s: float | None = None,
+    mesh_level: int | None = None,
+    grading: float | None = None,
+    exact_volume: bool | None = None,
+    element: str | None = None,
+    tolerance: float | None = None,
+    max_strain_increment: float | None = None,
+    dt_initial_s: float | None = None,
+    dt_max_s: float | None = None,
+    max_steps: int | None = None,
+    time_targets_s: list[float] = ...,
+    newton_max_iterations: int | None = None,
+    newton_residual_tolerance: float | None = None,
+    contact: str = "frictionless",
+    tied_planes: bool = False,
+    contact_penalty_factor: float | None = None,
+    penetration_tolerance: float | None = None,
+) -> None:
+    """Checks load and solver knobs against their ranges without building a run."""
 
 @final
 class Material:

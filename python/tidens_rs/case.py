@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+import os
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -9,8 +11,8 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from . import _core, io
-from ._core import CONTACT_MODES, SOLVER_DEFAULTS, Cell, ConvergenceError, Material
+from . import _checks, _core, io
+from ._core import CONTACT_MODES, ELEMENTS, SOLVER_DEFAULTS, Cell, ConvergenceError, Material
 from .estimate import COMPANION_TOLERANCE_FACTOR, ErrorEstimate, estimate_error
 from .result import MARK_DENSITIES, Result
 from .snapshot import Snapshot
@@ -104,6 +106,29 @@ class SolverSettings:
     contact_penalty_factor: float = SOLVER_DEFAULTS["contact_penalty_factor"]
     penetration_tolerance: float = SOLVER_DEFAULTS["penetration_tolerance"]
 
+    def __post_init__(self) -> None:
+        # Checked when written, not when run: the kinds here, the ranges by
+        # the core (the one source of both ranges and defaults).
+        c = _checks
+        fixed: dict[str, Any] = {
+            "mesh_level": c.integer("mesh_level", self.mesh_level),
+            "tolerance": c.real("tolerance", self.tolerance),
+            "grading": c.real("grading", self.grading),
+            "exact_volume": c.flag("exact_volume", self.exact_volume),
+            "element": c.choice("element", self.element, ELEMENTS),
+            "max_strain_increment": c.real("max_strain_increment", self.max_strain_increment),
+            "dt_initial_s": c.optional_real("dt_initial_s", self.dt_initial_s, "s"),
+            "dt_max_s": self.dt_max_s if self.dt_max_s == math.inf else c.real("dt_max_s", self.dt_max_s, "s"),
+            "max_steps": c.integer("max_steps", self.max_steps),
+            "newton_max_iterations": c.integer("newton_max_iterations", self.newton_max_iterations),
+            "newton_residual_tolerance": c.real("newton_residual_tolerance", self.newton_residual_tolerance),
+            "contact_penalty_factor": c.real("contact_penalty_factor", self.contact_penalty_factor),
+            "penetration_tolerance": c.real("penetration_tolerance", self.penetration_tolerance),
+        }
+        _core.check_parameters(**fixed)
+        for name, value in fixed.items():
+            object.__setattr__(self, name, value)
+
     def as_dict(self) -> dict[str, Any]:
         return asdict(self)
 
@@ -143,8 +168,21 @@ class Case:
 
     def __post_init__(self) -> None:
         # Fail on a typo when the case is written, not when it is run.
-        if self.contact not in CONTACT_MODES:
-            raise ValueError(f"contact = {self.contact!r}: must be one of {', '.join(CONTACT_MODES)}")
+        c = _checks
+        for name, kind in (("cell", Cell), ("material", Material), ("solver", SolverSettings)):
+            value = getattr(self, name)
+            if not isinstance(value, kind):
+                raise TypeError(f"{name} = {value!r}: must be a {kind.__name__}, not {type(value).__name__}")
+        fixed: dict[str, Any] = {
+            "stress_mpa": c.real("stress_mpa", self.stress_mpa, "MPa"),
+            "knockdown": c.real("knockdown", self.knockdown),
+            "ramp_time_s": c.real("ramp_time_s", self.ramp_time_s, "s"),
+            "contact": c.choice("contact", self.contact, CONTACT_MODES),
+            "tied_planes": c.flag("tied_planes", self.tied_planes),
+        }
+        _core.check_parameters(**fixed)
+        for name, value in fixed.items():
+            object.__setattr__(self, name, value)
 
     def simulation(
         self,
@@ -192,12 +230,18 @@ class Case:
         callback: ProgressCallback | None = None,
         error_estimate: bool = True,
         accuracy: float | None = None,
+        overwrite: bool = False,
     ) -> Result:
         """Presses until ``until_density`` or ``until_time_s`` (whichever first).
 
         With ``out_dir``, ``curve.csv`` is written row by row as the run goes,
         and ``summary.json`` and the VTU snapshots at the end (also when the
-        run fails or is interrupted). Snapshots are taken at the first step
+        run fails or is interrupted; each file through a temporary one
+        renamed when complete, so none is ever left truncated). The folder
+        must be new or empty: ``overwrite=True`` first deletes the outputs
+        of an earlier run in it (and only those). A file that cannot be
+        written raises :class:`tidens_rs.OutputError` naming it, with the
+        result in its ``result`` attribute; what was written stays. Snapshots are taken at the first step
         reaching each of ``snapshot_densities``, exactly at
         ``snapshot_times_s``, and at the end. ``callback(point)`` is called
         after every converged step with the curve point; returning False stops
@@ -229,11 +273,17 @@ class Case:
         A solver failure raises :class:`ConvergenceError` with the partial
         result in its ``result`` attribute.
         """
-        if until_density is None and until_time_s is None:
-            raise ValueError("until_density = None and until_time_s = None: give at least one")
-        if not isinstance(error_estimate, bool):
-            raise TypeError(f"error_estimate = {error_estimate!r}: must be True or False")
-        out = Path(out_dir) if out_dir is not None else None
+        until_density, until_time_s = self._check_stop(until_density, until_time_s)
+        snapshot_densities = self._check_densities("snapshot_densities", snapshot_densities)
+        snapshot_times_s = [_checks.in_open_range(f"snapshot_times_s[{k}]", t, 0.0, math.inf, "(0, inf) s") for k, t in enumerate(_checks.reals("snapshot_times_s", snapshot_times_s, "s"))]
+        _checks.flag("error_estimate", error_estimate)
+        _checks.flag("progress", progress)
+        if callback is not None and not callable(callback):
+            raise TypeError(f"callback = {callback!r}: must be callable (a function of the curve point) or None")
+        out = _out_dir(out_dir)
+        clear = _checks.flag("overwrite", overwrite)
+        if out is not None:
+            io.check_output_dir(out, clear)
         if accuracy is not None:
             if isinstance(accuracy, bool) or not isinstance(accuracy, (int, float)):
                 raise TypeError(f"accuracy = {accuracy!r}: must be a number")
@@ -250,6 +300,7 @@ class Case:
                 snapshot_times_s=snapshot_times_s,
                 progress=progress,
                 callback=callback,
+                clear_outputs=clear,
             )
         result, error = self._press(
             until_density,
@@ -259,6 +310,7 @@ class Case:
             snapshot_times_s=snapshot_times_s,
             progress=progress,
             callback=callback,
+            clear_outputs=clear,
         )
         why: str | None = None
         if error is not None or result.status not in ("reached_density", "reached_time"):
@@ -267,6 +319,27 @@ class Case:
             why = "not asked for (error_estimate=False)"
         result.error_estimate = self._estimate(result, until_density, until_time_s, out, progress, why)
         return _finish(result, error, out)
+
+    def _check_stop(self, until_density: Any, until_time_s: Any) -> tuple[float | None, float | None]:
+        """The stop condition, checked: a density in (rho0, 1), a time > 0."""
+        if until_density is None and until_time_s is None:
+            raise ValueError("until_density = None and until_time_s = None: give at least one")
+        rho = _checks.optional_real("until_density", until_density)
+        if rho is not None:
+            self._check_densities("until_density", [rho], single=True)
+        t = _checks.optional_real("until_time_s", until_time_s, "s")
+        if t is not None:
+            _checks.in_open_range("until_time_s", t, 0.0, math.inf, "(0, inf) s")
+        return rho, t
+
+    def _check_densities(self, name: str, values: Any, single: bool = False) -> list[float]:
+        """Relative densities, each in (rho0, 1) of the cell."""
+        rho0 = self.cell.rho0
+        checked = [values[0]] if single else _checks.reals(name, values)
+        for k, r in enumerate(checked):
+            where = name if single else f"{name}[{k}]"
+            _checks.in_open_range(where, r, rho0, 1.0, f"(rho0 = {rho0:.4f}, 1): the cell starts at rho0")
+        return checked
 
     def _run_to_accuracy(
         self,
@@ -279,6 +352,7 @@ class Case:
         snapshot_times_s: Sequence[float],
         progress: bool,
         callback: ProgressCallback | None,
+        clear_outputs: bool,
     ) -> Result:
         """Climbs the accuracy ladder (see :meth:`run`)."""
         rungs: list[dict[str, Any]] = []
@@ -300,6 +374,7 @@ class Case:
                 snapshot_times_s=snapshot_times_s,
                 progress=progress,
                 callback=callback,
+                clear_outputs=clear_outputs and previous is None,
             )
             done = error is not None or result.status not in ("reached_density", "reached_time")
             if done:
@@ -344,10 +419,15 @@ class Case:
         progress: bool = False,
         callback: ProgressCallback | None = None,
         fields: bool = True,
+        clear_outputs: bool = False,
     ) -> tuple[Result, BaseException | None]:
         """One run of the solver, streaming its curve to ``curve_path``: the
-        result and the exception that ended it (None if none did)."""
+        result and the exception that ended it (None if none did). With
+        ``clear_outputs``, an earlier run's outputs beside ``curve_path`` are
+        deleted once the simulation is set up (bad input leaves them)."""
         sim = self.simulation(until_density, until_time_s, snapshot_times_s)
+        if clear_outputs and curve_path is not None:
+            io.clear_outputs(curve_path.parent)
         writer = io.CurveWriter(curve_path) if curve_path is not None else None
         pending_rho = sorted(r for r in snapshot_densities)
         pending_t = sorted(t for t in snapshot_times_s)
@@ -357,10 +437,9 @@ class Case:
         message: str | None = None
         error: BaseException | None = None
         start = time.perf_counter()
-        first = sim.curve()
-        if writer is not None:
-            writer.write({k: v[0] for k, v in first.items()})
         try:
+            if writer is not None:
+                writer.write({k: v[0] for k, v in sim.curve().items()})
             while sim.status == "running":
                 p = sim.advance()
                 if writer is not None:
@@ -379,10 +458,11 @@ class Case:
             error = e
         except KeyboardInterrupt as e:
             status, message, error = "interrupted", "interrupted by the user", e
-        finally:
-            if writer is not None:
-                writer.close()
+        except io.OutputError as e:
+            status, message, error = "output_failed", str(e), e
         curve = sim.curve()
+        if writer is not None:
+            error = _complete_curve(writer, curve, error)
         last = {k: v[-1] for k, v in curve.items()}
         if fields:
             snapshots.append(_snapshot(sim, "final", last))
@@ -434,12 +514,45 @@ class Case:
 
 
 
+def _out_dir(out_dir: Any) -> Path | None:
+    """The output folder, checked: a path (str or os.PathLike), not empty."""
+    if out_dir is None:
+        return None
+    if not isinstance(out_dir, (str, os.PathLike)):
+        raise TypeError(f"out_dir = {out_dir!r}: must be a path (str or pathlib.Path) or None")
+    if str(out_dir).strip() == "":
+        raise ValueError("out_dir = '': must name a folder (use '.' for the current one)")
+    return Path(out_dir)
+
+
+def _complete_curve(writer: io.CurveWriter, curve: dict[str, Any], error: BaseException | None) -> BaseException | None:
+    """Writes the rows of ``curve`` the streamed file lacks (a step that
+    converged while Ctrl-C arrived, before its row was written) and closes
+    it, so that the file and the summary end at the same step; returns the
+    error that ended the run, or the write failure if there was none."""
+    try:
+        for k in range(writer.rows, len(curve["time_s"])):
+            writer.write({c: v[k] for c, v in curve.items()})
+    except io.OutputError as e:
+        error = error or e
+    finally:
+        try:
+            writer.close()
+        except io.OutputError as e:
+            error = error or e
+    return error
+
+
 def _finish(result: Result, error: BaseException | None, out: Path | None) -> Result:
     """Writes the summary and the fields of a finished run to ``out``, and
-    re-raises the error that ended it, carrying the result."""
+    re-raises the error that ended it (or the first write failure),
+    carrying the result."""
     if out is not None:
-        result.write_summary(out / "summary.json")
-        result.write_vtu(out)
+        try:
+            result.write_summary(out / "summary.json")
+            result.write_vtu(out)
+        except io.OutputError as e:
+            error = error or e
     if error is not None:
         error.result = result  # type: ignore[attr-defined]
         raise error

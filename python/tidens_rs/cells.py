@@ -166,6 +166,8 @@ def from_file(path: str | Path) -> Cell:
         text = p.read_text(encoding="utf-8")
     except OSError as e:
         raise ValueError(f"cell file {p}: cannot be read ({e.strerror or e})") from e
+    except UnicodeDecodeError as e:
+        raise ValueError(f"cell file {p}: not a text file (byte {e.start} is not UTF-8): a cell file is JSON or TOML text") from e
     data: Any
     if suffix == ".json":
         try:

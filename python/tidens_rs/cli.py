@@ -10,18 +10,85 @@ rho = 0.9).
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 import threading
 from collections.abc import Sequence
 from pathlib import Path
+from typing import NoReturn
 
 from . import cells, materials
-from ._core import CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, TidensError, __version__
+from ._core import CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, TidensError, UnsupportedError, __version__
 from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings
 from .result import MARK_DENSITIES, Result
 
 # The solver defaults, as the Python API has them (the core's).
 _DEFAULTS = SolverSettings()
+
+# The option of each Python argument, so that errors name what was typed.
+_OPTION_OF = {
+    "stress_mpa": "--stress",
+    "knockdown": "--knockdown",
+    "ramp_time_s": "--ramp-time",
+    "until_density": "--until-density",
+    "until_time_s": "--until-time",
+    "mesh_level": "--mesh-level",
+    "tolerance": "--tolerance",
+    "grading": "--grading",
+    "element": "--element",
+    "max_steps": "--max-steps",
+    "accuracy": "--accuracy",
+    "snapshot_densities": "--vtu-densities",
+    "snapshot_times_s": "--vtu-times",
+    "time_targets_s": "--vtu-times",
+    "young_mpa (E)": "--E",
+    "poisson (nu)": "--nu",
+    "creep_c (C)": "--C",
+    "creep_n (n)": "--n",
+    "radius_mm": "--radius",
+    "radius": "--radius",
+    "aspect_ratio": "--aspect-ratio",
+    "size_ratio": "--size-ratio",
+    "contact": "--contact",
+    "out_dir": "--out",
+}
+_NAMED = re.compile(
+    r"(?<![\w-])(" + "|".join(re.escape(k) for k in sorted(_OPTION_OF, key=len, reverse=True)) + r")(?=(\[\d+\])? = )"
+)
+# A negative number in any notation (argparse takes "-4.8e-7" for an option).
+_NEGATIVE = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|nan)$", re.IGNORECASE)
+
+
+def option_names(message: str) -> str:
+    """``message`` with the Python argument names (``stress_mpa = 0``) as
+    the options that set them (``--stress = 0``)."""
+    message = _NAMED.sub(lambda m: _OPTION_OF[m.group(1)], message)
+    return message.replace("overwrite=True", "--overwrite")
+
+
+def _glue_negative_numbers(argv: Sequence[str]) -> list[str]:
+    """``--C -4.8e-7`` as ``--C=-4.8e-7``, so that a negative value reaches
+    the range check instead of argparse's "expected one argument"."""
+    out: list[str] = []
+    for arg in argv:
+        if out and _NEGATIVE.match(arg) and out[-1].startswith("--") and "=" not in out[-1]:
+            out[-1] = f"{out[-1]}={arg}"
+        else:
+            out.append(arg)
+    return out
+
+
+class _Parser(argparse.ArgumentParser):
+    """Bad input in one line (and exit status 2), without the usage block."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {option_names(message)} (see {self.prog} --help)\n")
+
+
+def _folder(text: str) -> Path:
+    if not text.strip():
+        raise argparse.ArgumentTypeError("'': must name a folder (use . for the current one)")
+    return Path(text)
 
 
 def _float_list(text: str) -> list[float]:
@@ -64,7 +131,8 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--no-error-estimate", dest="error_estimate", action="store_false", help="skip the coarse companion run (one mesh level down at twice the tolerance, a fifth to a third of the cost) that gives the error estimate")
     g.add_argument("--max-steps", type=int, default=_DEFAULTS.max_steps, help=f"step limit (default {_DEFAULTS.max_steps})")
     g = p.add_argument_group("output")
-    g.add_argument("--out", type=Path, required=True, help="output directory")
+    g.add_argument("--out", type=_folder, required=True, help="output folder, new or empty (see --overwrite)")
+    g.add_argument("--overwrite", action="store_true", help="first delete the outputs of an earlier run in --out (curve, summary, fields, plot; nothing else)")
     g.add_argument("--vtu-densities", type=_float_list, help="comma-separated densities for VTU snapshots (default those of 0.6,0.7,0.8,0.9 above the cell's rho0)")
     g.add_argument("--vtu-times", type=_float_list, default=[], help="comma-separated times [s] for VTU snapshots")
     g.add_argument("--no-plot", action="store_true", help="do not write density.png")
@@ -183,9 +251,9 @@ def _run(args: argparse.Namespace) -> int:
         ),
     )
     # The default snapshot densities start at 0.6, below rho0 of the denser packings.
-    densities = args.vtu_densities if args.vtu_densities is not None else [r for r in MARK_DENSITIES if r > case.cell.rho0]
-    if args.until_density is not None:
-        densities = [r for r in densities if r <= args.until_density]
+    densities = args.vtu_densities
+    if densities is None:
+        densities = [r for r in MARK_DENSITIES if r > case.cell.rho0 and (args.until_density is None or r <= args.until_density)]
     out: Path = args.out
     try:
         result = case.run(
@@ -197,13 +265,14 @@ def _run(args: argparse.Namespace) -> int:
             progress=not args.quiet,
             error_estimate=args.error_estimate,
             accuracy=args.accuracy,
+            overwrite=args.overwrite,
         )
     except ConvergenceError as e:
-        print(f"tidens: solver failure: {e}\n(partial results in {out})", file=sys.stderr)
+        print(f"tidens: solver failure: {e} (partial results in {out})", file=sys.stderr)
         partial = getattr(e, "result", None)
         if partial is not None and not args.no_plot:
             partial.plot(out / "density.png")
-        return 2
+        return 3
     if not args.no_plot:
         result.plot(out / "density.png")
     _report(result)
@@ -212,37 +281,43 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="tidens", description="Powder-level FE of hot pressing of titanium powders (units: mm, N, MPa, s).")
+    parser = _Parser(prog="tidens", description="Powder-level FE of hot pressing of titanium powders (units: mm, N, MPa, s).")
     parser.add_argument("--version", action="version", version=f"tidens {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="press one cell and write curve, summary, fields and a plot")
     _add_run_options(run)
     demo = sub.add_parser("demo", help="the README case: sc Ti-6Al-4V at 10 MPa to rho = 0.9, with a plot")
-    demo.add_argument("--out", type=Path, default=Path("tidens-demo"), help="output directory (default ./tidens-demo)")
+    demo.add_argument("--out", type=_folder, default=Path("tidens-demo"), help="output folder (default ./tidens-demo; an earlier demo's outputs there are replaced)")
     demo.add_argument("--quiet", action="store_true", help="no progress bar")
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """The command; returns its exit status: 0 done, 2 bad input (one line
+    naming the option), 1 a file that cannot be read or written, 3 a solver
+    failure (partial results written), 130 interrupted."""
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_glue_negative_numbers(sys.argv[1:] if argv is None else argv))
     if args.command == "demo":
         argv2 = [
             "run", "--cell", "sc", "--material", "ti64-creep-1293k", "--stress", "10",
             "--until-density", "0.9", "--out", str(args.out),
+            "--overwrite",  # the demo replaces its own earlier outputs
         ] + (["--quiet"] if args.quiet else [])
         args = parser.parse_args(argv2)
     try:
         return _run(args)
-    except (ValueError, TypeError) as e:
+    except (ValueError, TypeError, FileExistsError, UnsupportedError) as e:
         parser.error(str(e))
+    except OSError as e:
+        print(f"tidens: {e}", file=sys.stderr)
+        return 1
     except TidensError as e:
         print(f"tidens: {e}", file=sys.stderr)
-        return 2
+        return 3
     except KeyboardInterrupt:
         print(f"tidens: interrupted; partial results in {args.out}", file=sys.stderr)
         return 130
-    return 1
 
 
 if __name__ == "__main__":

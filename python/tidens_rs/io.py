@@ -5,8 +5,11 @@ VTU (through meshio) with a ParaView collection (.pvd) tying them in time."""
 from __future__ import annotations
 
 import csv
+import fnmatch
 import json
 import math
+import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
@@ -34,23 +37,112 @@ CURVE_COLUMNS = (
 )
 
 
+# What a run writes into its output folder (``--overwrite`` clears these and
+# nothing else); temporary files of interrupted atomic writes end in ".part".
+OUTPUT_PATTERNS = (
+    "curve.csv",
+    "companion_curve.csv",
+    "summary.json",
+    "fields_*.vtu",
+    "fields.pvd",
+    "density.png",
+    "*.part",
+)
+
+
+class OutputError(OSError):
+    """A file of the run could not be written: ``filename`` is its path.
+    What was written before it is kept; the run's result, if any, is in the
+    ``result`` attribute."""
+
+    def __str__(self) -> str:
+        return f"cannot write {self.filename}: {self.strerror}"
+
+
+def output_error(path: Path, e: OSError) -> OutputError:
+    """``e`` as an OutputError naming ``path``."""
+    return OutputError(e.errno or 0, e.strerror or str(e), str(path))
+
+
+def atomic_write(path: Path, write: Callable[[Path], object]) -> Path:
+    """Writes ``path`` through ``write(tmp)`` into a temporary file beside it,
+    renamed over ``path`` only once complete: a stop or a full disk never
+    leaves a truncated file under the final name. Raises OutputError."""
+    tmp = path.with_name(path.name + ".part")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write(tmp)
+        os.replace(tmp, path)
+    except OSError as e:
+        tmp.unlink(missing_ok=True)
+        raise output_error(path, e) from e
+    return path
+
+
+def check_output_dir(path: Path, overwrite: bool) -> None:
+    """Checks that a run may write into ``path`` (without touching it): a
+    folder that does not exist yet or holds nothing; with ``overwrite``, one
+    that holds nothing but an earlier run's outputs (:data:`OUTPUT_PATTERNS`).
+    Raises FileExistsError saying what is in the way."""
+    if path.exists() and not path.is_dir():
+        raise FileExistsError(f"{path} is not a folder: give a folder for the outputs")
+    if not path.exists():
+        return
+    try:
+        names = sorted(p.name for p in path.iterdir())
+    except OSError as e:
+        raise output_error(path, e) from e
+    if overwrite:
+        names = [n for n in names if not any(fnmatch.fnmatch(n, pattern) for pattern in OUTPUT_PATTERNS)]
+    if names:
+        shown = ", ".join(names[:5]) + (", ..." if len(names) > 5 else "")
+        what = "files that are not outputs of a run" if overwrite else "files"
+        raise FileExistsError(
+            f"{path} holds {what} ({shown}): give an empty or new folder"
+            + ("" if overwrite else ", or overwrite=True to replace an earlier run's outputs")
+        )
+
+
+def clear_outputs(path: Path) -> None:
+    """Deletes the outputs of an earlier run in folder ``path`` (and nothing else)."""
+    try:
+        for pattern in OUTPUT_PATTERNS:
+            for old in path.glob(pattern):
+                old.unlink()
+    except OSError as e:
+        raise output_error(path, e) from e
+
+
 class CurveWriter:
     """Appends curve points to a CSV file (header row first), flushing each
-    row so the file is complete up to the last converged step at any time."""
+    row so the file is complete up to the last converged step at any time.
+    Raises OutputError naming the file when it cannot be written."""
 
     def __init__(self, path: Path) -> None:
         self.path = path
-        path.parent.mkdir(parents=True, exist_ok=True)
-        self._file: IO[str] = path.open("w", newline="")
-        self._csv = csv.writer(self._file)
-        self._csv.writerow(CURVE_COLUMNS)
+        self.rows = 0
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            self._file: IO[str] = path.open("w", newline="")
+            self._csv = csv.writer(self._file)
+            self._csv.writerow(CURVE_COLUMNS)
+            self._file.flush()
+        except OSError as e:
+            raise output_error(path, e) from e
 
     def write(self, point: dict[str, float]) -> None:
-        self._csv.writerow([_format(point[k]) for k in CURVE_COLUMNS])
-        self._file.flush()
+        try:
+            self._csv.writerow([_format(point[k]) for k in CURVE_COLUMNS])
+            self._file.flush()
+        except OSError as e:
+            raise output_error(self.path, e) from e
+        self.rows += 1
 
     def close(self) -> None:
-        self._file.close()
+        try:
+            self._file.close()
+        except OSError as e:
+            raise output_error(self.path, e) from e
 
     def __enter__(self) -> CurveWriter:
         return self
@@ -92,8 +184,8 @@ def _json_safe(value: Any) -> Any:
 
 
 def write_summary(path: Path, summary: dict[str, Any]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(_json_safe(summary), indent=2) + "\n")
+    text = json.dumps(_json_safe(summary), indent=2) + "\n"
+    atomic_write(path, lambda tmp: tmp.write_text(text))
 
 
 def write_vtu(path: Path, snapshot: Snapshot) -> Path:
@@ -101,7 +193,6 @@ def write_vtu(path: Path, snapshot: Snapshot) -> Path:
     displacement, contact force (of the rigid planes) and particle-particle
     contact pressure at the nodes; von Mises stress, mean stress, equivalent
     plastic strain and the particle index per element."""
-    path.parent.mkdir(parents=True, exist_ok=True)
     f = snapshot.fields
     mesh = meshio.Mesh(
         points=f["points"],
@@ -118,8 +209,7 @@ def write_vtu(path: Path, snapshot: Snapshot) -> Path:
             "particle": [f["particle"]],
         },
     )
-    meshio.write(path, mesh, file_format="vtu")
-    return path
+    return atomic_write(path, lambda tmp: meshio.write(tmp, mesh, file_format="vtu"))
 
 
 def write_pvd(path: Path, entries: list[tuple[float, Path]]) -> Path:
@@ -127,8 +217,8 @@ def write_pvd(path: Path, entries: list[tuple[float, Path]]) -> Path:
     rows = "\n".join(
         f'    <DataSet timestep="{t!r}" part="0" file="{p.name}"/>' for t, p in entries
     )
-    path.write_text(
+    text = (
         '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
         f"{rows}\n  </Collection>\n</VTKFile>\n"
     )
-    return path
+    return atomic_write(path, lambda tmp: tmp.write_text(text))

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from . import cells, io
+from . import _checks, cells, io
 from ._core import Cell, __version__
 from .continuum import ContinuumModel
 from .estimate import ErrorEstimate, estimate_error
@@ -101,8 +101,13 @@ class Result:
         return float(self.rel_density[0])
 
     def time_to_density(self, rho: float) -> float | None:
-        """Time [s] to reach density ``rho``, None if not reached."""
-        return interpolate_time(self.time_s, self.rel_density, rho)
+        """Time [s] to reach density ``rho`` in [rho0, 1), None if not
+        reached. A density below the run's first one is an error (the
+        packing never was that loose), not 0 s."""
+        r = _checks.real("rho", rho)
+        if not self.rho0 <= r < 1.0:
+            raise ValueError(f"rho = {rho!r}: must be in [rho0 = {self.rho0:.4f}, 1): the run starts at rho0")
+        return interpolate_time(self.time_s, self.rel_density, r)
 
     def time_error_at_density(self, rho: float) -> float | None:
         """Estimated time-discretisation error [s] of :meth:`time_to_density`."""
@@ -213,5 +218,7 @@ class Result:
 
         fig = plot_density(self)
         if path is not None:
-            fig.savefig(Path(path), dpi=150)
+            p = Path(path)
+            kind = p.suffix[1:].lower() or "png"
+            io.atomic_write(p, lambda tmp: fig.savefig(tmp, dpi=150, format=kind))
         return fig

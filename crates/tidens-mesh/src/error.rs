@@ -35,7 +35,7 @@ pub enum MeshError {
         value: f64,
     },
     /// Division count of a block along one axis.
-    #[error("divisions[{axis}] = {value}: must be in 1..={MAX_BLOCK_DIVISIONS}")]
+    #[error("divisions[{axis}] = {value}: must be an integer in [1, {MAX_BLOCK_DIVISIONS}]")]
     BlockDivisions {
         /// Axis index 0, 1 or 2 (x, y, z).
         axis: usize,
@@ -77,7 +77,7 @@ pub enum MeshError {
         element: usize,
     },
     /// Mesh refinement level.
-    #[error("level = {0}: must be in 1..={MAX_LEVEL}")]
+    #[error("level = {0}: must be an integer in [1, {MAX_LEVEL}]")]
     Level(u32),
     /// The outward surface offset that gives an octant mesh its exact volume
     /// was not found: the volume could not be brought within the tolerance.

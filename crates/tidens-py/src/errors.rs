@@ -87,7 +87,11 @@ pub(crate) fn parameter_error(
 
 /// `ValueError` for an out-of-range mesh level.
 pub(crate) fn mesh_level_error(level: impl std::fmt::Display) -> PyErr {
-    parameter_error("mesh_level", level, &format!("in 1..={MAX_MESH_LEVEL}"))
+    parameter_error(
+        "mesh_level",
+        level,
+        &format!("an integer in [1, {MAX_MESH_LEVEL}]"),
+    )
 }
 
 /// Maps a material error: bad parameters and unknown presets are bad input;
@@ -118,6 +122,7 @@ pub(crate) fn solver_error(err: SolverError, phase: Phase) -> PyErr {
         SolverError::Material(e) => material_error(e, phase),
         SolverError::Mesh(MeshError::Level(level)) => mesh_level_error(level),
         SolverError::Mesh(e) => PyValueError::new_err(e.to_string()),
+        SolverError::NoLoadPath { .. } => PyValueError::new_err(err.to_string()),
         SolverError::Unsupported(_) => UnsupportedError::new_err(err.to_string()),
         SolverError::Fem(_) => match phase {
             Phase::Setup => PyValueError::new_err(err.to_string()),

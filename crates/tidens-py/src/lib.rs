@@ -16,7 +16,7 @@ mod simulation;
 pub use cell::PyCell;
 pub use errors::{ConvergenceError, TidensError, UnsupportedError};
 pub use material::{PyMaterial, tmp_creep_coefficient};
-pub use simulation::PySimulation;
+pub use simulation::{PySimulation, check_parameters};
 
 /// Native core of tidens (Rust, PyO3). Units: mm, N, MPa, s.
 ///
@@ -29,7 +29,7 @@ mod _core {
     #[pymodule_export]
     use super::{
         ConvergenceError, PyCell, PyMaterial, PySimulation, TidensError, UnsupportedError,
-        tmp_creep_coefficient,
+        check_parameters, tmp_creep_coefficient,
     };
 
     #[pymodule_init]

@@ -102,6 +102,190 @@ pub(crate) fn solver_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     Ok(d)
 }
 
+/// The load, stop and solver knobs of a run as the Python keyword arguments
+/// give them (None: the core's default).
+struct Knobs<'a> {
+    stress_mpa: f64,
+    knockdown: f64,
+    ramp_time_s: f64,
+    until_density: Option<f64>,
+    until_time_s: Option<f64>,
+    mesh_level: Option<i64>,
+    grading: Option<f64>,
+    exact_volume: Option<bool>,
+    element: Option<&'a str>,
+    tolerance: Option<f64>,
+    max_strain_increment: Option<f64>,
+    dt_initial_s: Option<f64>,
+    dt_max_s: Option<f64>,
+    max_steps: Option<i64>,
+    time_targets_s: Vec<f64>,
+    newton_max_iterations: Option<i64>,
+    newton_residual_tolerance: Option<f64>,
+    contact: &'a str,
+    tied_planes: bool,
+    contact_penalty_factor: Option<f64>,
+    penetration_tolerance: Option<f64>,
+}
+
+impl Knobs<'_> {
+    /// The core's settings, mesh options and element, every value checked
+    /// against its range (a ValueError naming the Python argument).
+    fn checked(self) -> PyResult<(Settings, MeshOptions, ElementKind)> {
+        // A knob left at None takes the core's default (the one source of
+        // the defaults, also published as SOLVER_DEFAULTS).
+        let load = LoadHistory {
+            stress: self.stress_mpa,
+            knockdown: self.knockdown,
+            ramp_time: self.ramp_time_s,
+        };
+        let defaults = Settings::new(load);
+        let mesh_defaults = MeshOptions::default();
+        let level = match self.mesh_level {
+            Some(l) => u32::try_from(l).map_err(|_| mesh_level_error(l))?,
+            None => mesh_defaults.level,
+        };
+        let newton = &defaults.newton;
+        let contact_defaults = &defaults.contact;
+        let settings = Settings {
+            until_density: self.until_density,
+            until_time: self.until_time_s,
+            tolerance: self.tolerance.unwrap_or(defaults.tolerance),
+            max_strain_increment: self
+                .max_strain_increment
+                .unwrap_or(defaults.max_strain_increment),
+            dt_initial: self.dt_initial_s,
+            dt_max: self.dt_max_s.unwrap_or(defaults.dt_max),
+            max_steps: match self.max_steps {
+                Some(m) => count("max_steps", m, ">= 1")?,
+                None => defaults.max_steps,
+            },
+            time_targets: self.time_targets_s,
+            newton: NewtonSettings {
+                max_iterations: match self.newton_max_iterations {
+                    Some(m) => count("newton_max_iterations", m, "in [1, 1000]")?,
+                    None => newton.max_iterations,
+                },
+                residual_tolerance: self
+                    .newton_residual_tolerance
+                    .unwrap_or(newton.residual_tolerance),
+                ..newton.clone()
+            },
+            contact: ContactOptions {
+                mode: contact_mode(self.contact)?,
+                tied_planes: self.tied_planes,
+                penalty_factor: self
+                    .contact_penalty_factor
+                    .unwrap_or(contact_defaults.penalty_factor),
+                penetration_tolerance: self
+                    .penetration_tolerance
+                    .unwrap_or(contact_defaults.penetration_tolerance),
+            },
+            ..defaults.clone()
+        };
+        settings
+            .validate()
+            .map_err(|e| solver_error(e, Phase::Setup))?;
+        let options = MeshOptions {
+            level,
+            grading: self.grading.unwrap_or(mesh_defaults.grading),
+            exact_volume: self.exact_volume.unwrap_or(mesh_defaults.exact_volume),
+        };
+        options
+            .validate()
+            .map_err(|e| solver_error(e, Phase::Setup))?;
+        let kind = element_kind(self.element.unwrap_or(ELEMENTS[0].0))?;
+        Ok((settings, options, kind))
+    }
+}
+
+/// Checks load and solver knobs against their ranges without building a
+/// run: the keyword arguments of Simulation but the cell and the material,
+/// all optional (a knob not given is not checked; the stop condition only
+/// when given). Raises ValueError naming the first argument out of range.
+#[pyfunction]
+#[pyo3(signature = (
+    *,
+    stress_mpa = 1.0,
+    knockdown = 1.0,
+    ramp_time_s = 1.0,
+    until_density = None,
+    until_time_s = None,
+    mesh_level = None,
+    grading = None,
+    exact_volume = None,
+    element = None,
+    tolerance = None,
+    max_strain_increment = None,
+    dt_initial_s = None,
+    dt_max_s = None,
+    max_steps = None,
+    time_targets_s = Vec::new(),
+    newton_max_iterations = None,
+    newton_residual_tolerance = None,
+    contact = "frictionless",
+    tied_planes = false,
+    contact_penalty_factor = None,
+    penetration_tolerance = None,
+))]
+// The Python keyword arguments: one per solver knob.
+#[allow(clippy::too_many_arguments)]
+pub fn check_parameters(
+    stress_mpa: f64,
+    knockdown: f64,
+    ramp_time_s: f64,
+    until_density: Option<f64>,
+    until_time_s: Option<f64>,
+    mesh_level: Option<i64>,
+    grading: Option<f64>,
+    exact_volume: Option<bool>,
+    element: Option<&str>,
+    tolerance: Option<f64>,
+    max_strain_increment: Option<f64>,
+    dt_initial_s: Option<f64>,
+    dt_max_s: Option<f64>,
+    max_steps: Option<i64>,
+    time_targets_s: Vec<f64>,
+    newton_max_iterations: Option<i64>,
+    newton_residual_tolerance: Option<f64>,
+    contact: &str,
+    tied_planes: bool,
+    contact_penalty_factor: Option<f64>,
+    penetration_tolerance: Option<f64>,
+) -> PyResult<()> {
+    // The core wants a stop condition; a placeholder stands in when none is
+    // given, so that only the knobs given are judged.
+    let until_time_s = match (until_density, until_time_s) {
+        (None, None) => Some(1.0),
+        (_, t) => t,
+    };
+    Knobs {
+        stress_mpa,
+        knockdown,
+        ramp_time_s,
+        until_density,
+        until_time_s,
+        mesh_level,
+        grading,
+        exact_volume,
+        element,
+        tolerance,
+        max_strain_increment,
+        dt_initial_s,
+        dt_max_s,
+        max_steps,
+        time_targets_s,
+        newton_max_iterations,
+        newton_residual_tolerance,
+        contact,
+        tied_planes,
+        contact_penalty_factor,
+        penetration_tolerance,
+    }
+    .checked()
+    .map(|_| ())
+}
+
 /// What readers on other threads see: refreshed after every step.
 struct Progress {
     status: Status,
@@ -254,62 +438,32 @@ impl PySimulation {
                  condition (until_density in (rho0, 1), until_time_s > 0 s)",
             ));
         }
-        // A knob left at None takes the core's default (the one source of
-        // the defaults, also published as SOLVER_DEFAULTS).
-        let load = LoadHistory {
-            stress: stress_mpa,
+        let (settings, options, kind) = Knobs {
+            stress_mpa,
             knockdown,
-            ramp_time: ramp_time_s,
-        };
-        let defaults = Settings::new(load);
-        let mesh_defaults = MeshOptions::default();
-        let level = match mesh_level {
-            Some(l) => u32::try_from(l).map_err(|_| mesh_level_error(l))?,
-            None => mesh_defaults.level,
-        };
-        let newton = &defaults.newton;
-        let contact_defaults = &defaults.contact;
-        let settings = Settings {
+            ramp_time_s,
             until_density,
-            until_time: until_time_s,
-            tolerance: tolerance.unwrap_or(defaults.tolerance),
-            max_strain_increment: max_strain_increment.unwrap_or(defaults.max_strain_increment),
-            dt_initial: dt_initial_s,
-            dt_max: dt_max_s.unwrap_or(defaults.dt_max),
-            max_steps: match max_steps {
-                Some(m) => count("max_steps", m, ">= 1")?,
-                None => defaults.max_steps,
-            },
-            time_targets: time_targets_s,
-            newton: NewtonSettings {
-                max_iterations: match newton_max_iterations {
-                    Some(m) => count("newton_max_iterations", m, "in [1, 1000]")?,
-                    None => newton.max_iterations,
-                },
-                residual_tolerance: newton_residual_tolerance.unwrap_or(newton.residual_tolerance),
-                ..newton.clone()
-            },
-            contact: ContactOptions {
-                mode: contact_mode(contact)?,
-                tied_planes,
-                penalty_factor: contact_penalty_factor.unwrap_or(contact_defaults.penalty_factor),
-                penetration_tolerance: penetration_tolerance
-                    .unwrap_or(contact_defaults.penetration_tolerance),
-            },
-            ..defaults.clone()
-        };
-        // Cheap checks first, so bad input fails before the mesh is built.
-        settings
-            .validate()
-            .map_err(|e| solver_error(e, Phase::Setup))?;
+            until_time_s,
+            mesh_level,
+            grading,
+            exact_volume,
+            element,
+            tolerance,
+            max_strain_increment,
+            dt_initial_s,
+            dt_max_s,
+            max_steps,
+            time_targets_s,
+            newton_max_iterations,
+            newton_residual_tolerance,
+            contact,
+            tied_planes,
+            contact_penalty_factor,
+            penetration_tolerance,
+        }
+        .checked()?;
         let cell = cell.get().inner.clone();
         let material = material.get().inner;
-        let options = MeshOptions {
-            level,
-            grading: grading.unwrap_or(mesh_defaults.grading),
-            exact_volume: exact_volume.unwrap_or(mesh_defaults.exact_volume),
-        };
-        let kind = element_kind(element.unwrap_or(ELEMENTS[0].0))?;
         let (sim, element_particle) = py
             .detach(move || {
                 let scene = Scene::from_cell(&cell, &options)?.with_element(kind)?;

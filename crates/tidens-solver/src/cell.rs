@@ -82,8 +82,10 @@ fn check_radius_aspect(radius: f64, aspect: f64) -> Result<(), SolverError> {
 
 impl Cell {
     /// A cell from its box and octants, checked: positive finite lengths,
-    /// every octant inside the box (its semi-axes at most the box edges).
-    /// Overlaps between particles are checked when the cell is meshed.
+    /// every octant inside the box (its semi-axes at most the box edges), and
+    /// a chain of touching particles from the piston to the bottom plane
+    /// ([`crate::load_path`]). Overlaps between particles are checked when
+    /// the cell is meshed.
     pub fn new(
         name: impl Into<String>,
         lengths: [f64; 3],
@@ -116,11 +118,13 @@ impl Cell {
                 return Err(SolverError::parameter("c", o.c, "at most the box edge Lz"));
             }
         }
-        Ok(Cell {
+        let cell = Cell {
             name: name.into(),
             lengths,
             octants,
-        })
+        };
+        crate::load_path::check(&cell)?;
+        Ok(cell)
     }
 
     /// Simple cubic: one octant of a spheroid of semi-axes (R, R, k R),

@@ -10,6 +10,9 @@ pub enum SolverError {
         value: f64,
         allowed: String,
     },
+    /// A cell whose particles cannot carry the piston's load to the bottom.
+    #[error("cell '{cell}': {reason}")]
+    NoLoadPath { cell: String, reason: String },
     /// A scene that this version cannot build.
     #[error("unsupported scene: {0}")]
     Unsupported(String),

@@ -1,0 +1,119 @@
+"""Nothing lost or corrupted: output folders, atomic files, write failures,
+and the curve file agreeing with the summary after any stop."""
+
+import csv
+import errno
+import json
+from pathlib import Path
+from typing import Any
+
+import meshio
+import pytest
+
+import tidens_rs as td
+from tidens_rs import io
+from tidens_rs.cli import main
+
+
+def rows(path: Path) -> list[dict[str, str]]:
+    with path.open() as f:
+        return list(csv.DictReader(f))
+
+
+def test_a_run_into_a_folder_with_files_is_refused_unless_overwrite(quick_case: td.Case, tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    quick_case.run(until_density=0.6, out_dir=out, snapshot_densities=[0.55], error_estimate=False)
+    assert (out / "fields_rho0.550.vtu").exists()
+    with pytest.raises(FileExistsError, match="overwrite=True"):
+        quick_case.run(until_density=0.58, out_dir=out, error_estimate=False)
+    # Overwrite: the earlier run's outputs go (no stale snapshot stays), the new ones come.
+    r = quick_case.run(until_density=0.58, out_dir=out, error_estimate=False, overwrite=True)
+    assert not (out / "fields_rho0.550.vtu").exists()
+    s = json.loads((out / "summary.json").read_text())
+    assert s["final_density"] == pytest.approx(r.rel_density[-1], rel=1e-12)
+    # A file that is not an output is never deleted: the folder is refused.
+    (out / "notes.txt").write_text("mine")
+    with pytest.raises(FileExistsError, match="notes.txt"):
+        quick_case.run(until_density=0.58, out_dir=out, overwrite=True)
+    assert (out / "notes.txt").read_text() == "mine" and (out / "summary.json").exists()
+
+
+def test_bad_input_leaves_an_earlier_run_untouched(quick_case: td.Case, tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    quick_case.run(until_density=0.56, out_dir=out, error_estimate=False)
+    before = sorted(p.name for p in out.iterdir())
+    overlapping = td.cells.custom("overlap", (0.1, 0.1, 0.06), [("000", 0.06, 0.06), ("100", 0.06, 0.06)])
+    bad = td.Case(cell=overlapping, material=quick_case.material, stress_mpa=10.0, solver=quick_case.solver)
+    with pytest.raises(td.UnsupportedError):
+        bad.run(until_density=0.6, out_dir=out, overwrite=True)
+    assert sorted(p.name for p in out.iterdir()) == before
+
+
+def test_a_failed_write_names_the_file_keeps_what_was_written_and_leaves_no_truncated_file(
+    quick_case: td.Case, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def full_disk(path: Any, *args: Any, **kwargs: Any) -> None:
+        Path(path).write_bytes(b"<VTKFile trunc")  # a partial write, then the failure
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(meshio, "write", full_disk)
+    out = tmp_path / "run"
+    with pytest.raises(io.OutputError) as e:
+        quick_case.run(until_density=0.6, out_dir=out, snapshot_densities=[0.55], error_estimate=False)
+    assert e.value.filename == str(out / "fields_rho0.550.vtu") and e.value.errno == errno.ENOSPC
+    assert "cannot write" in str(e.value) and "No space left" in str(e.value)
+    # The result travels with the error; the curve and the summary were written and agree.
+    result = e.value.result  # type: ignore[attr-defined]
+    s = json.loads((out / "summary.json").read_text())
+    assert s["status"] == "reached_density" and s["steps"] == len(rows(out / "curve.csv")) - 1
+    assert s["final_density"] == pytest.approx(result.rel_density[-1], rel=1e-12)
+    # No VTU under its final name, no temporary file left.
+    assert not list(out.glob("*.vtu")) and not list(out.glob("*.part"))
+
+
+def test_the_curve_file_and_the_summary_agree_after_an_interrupt_between_step_and_row(
+    quick_case: td.Case, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # Ctrl-C arriving after a step converged but before its row was written.
+    original = io.CurveWriter.write
+    calls = {"n": 0}
+
+    def interrupted(self: io.CurveWriter, point: dict[str, float]) -> None:
+        calls["n"] += 1
+        if calls["n"] == 6:
+            raise KeyboardInterrupt
+        original(self, point)
+
+    monkeypatch.setattr(io.CurveWriter, "write", interrupted)
+    out = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt):
+        quick_case.run(until_density=0.9, out_dir=out)
+    s = json.loads((out / "summary.json").read_text())
+    curve = rows(out / "curve.csv")
+    assert s["status"] == "interrupted" and s["steps"] == 5
+    assert len(curve) == s["steps"] + 1
+    assert float(curve[-1]["rel_density"]) == pytest.approx(s["final_density"], rel=1e-12)
+
+
+def test_the_command_line_reports_a_failed_write_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def full_disk(path: Any, *args: Any, **kwargs: Any) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(meshio, "write", full_disk)
+    out = tmp_path / "run"
+    code = main(["run", "--stress", "10", "--until-density", "0.58", "--mesh-level", "1", "--quiet", "--no-plot",
+                 "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1 and str(out / "fields_final.vtu") in err, err
+    assert (out / "summary.json").exists()
+    # Into the same folder again: refused without --overwrite, run with it.
+    with pytest.raises(SystemExit) as e:
+        main(["run", "--stress", "10", "--until-density", "0.58", "--mesh-level", "1", "--quiet", "--no-plot",
+              "--out", str(out)])
+    assert e.value.code == 2 and "--overwrite" in capsys.readouterr().err
+    monkeypatch.undo()
+    assert main(["run", "--stress", "10", "--until-density", "0.58", "--mesh-level", "1", "--quiet", "--no-plot",
+                 "--overwrite", "--out", str(out)]) == 0
+    assert (out / "fields_final.vtu").exists()
