@@ -63,8 +63,11 @@ def test_solver_failure_keeps_the_partial_result(quick_case: td.Case, tmp_path: 
     case = dataclasses.replace(quick_case, solver=td.SolverSettings(mesh_level=1, max_steps=3))
     with pytest.raises(td.ConvergenceError, match="step limit 3") as info:
         case.run(until_density=0.9, out_dir=tmp_path)
-    partial = info.value.result  # type: ignore[attr-defined]
+    partial = info.value.result
     assert partial.status == "failed" and len(partial.time_s) == 4
+    # Where and why, as attributes.
+    assert info.value.reason == "step_limit" and info.value.step == 3 and info.value.dt_s is None
+    assert info.value.time_s == pytest.approx(partial.time_s[-1], rel=1e-12)
     rows = (tmp_path / "curve.csv").read_text().strip().splitlines()
     assert len(rows) == 1 + 4
     assert (tmp_path / "summary.json").exists() and (tmp_path / "fields_final.vtu").exists()

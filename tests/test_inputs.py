@@ -250,3 +250,27 @@ def test_a_cell_that_cannot_carry_the_load_is_refused_when_written(tmp_path: Pat
         main(["run", "--cell-file", str(path), "--stress", "10", "--until-density", "0.6", "--out", str(tmp_path / "o")])
     err = capsys.readouterr().err
     assert e.value.code == 2 and str(path) in err and "piston" in err and err.count("\n") == 1, err
+
+
+def test_every_default_has_one_source() -> None:
+    # The core's Settings, published as SOLVER_DEFAULTS, is what SolverSettings,
+    # the command line and the native Simulation (None = the core's) use.
+    import dataclasses
+    import inspect
+
+    from tidens_rs.cli import build_parser
+
+    assert td.SolverSettings().as_dict() == _core.SOLVER_DEFAULTS
+    args = build_parser().parse_args(["run", "--stress", "10", "--until-density", "0.8", "--out", "o"])
+    d = _core.SOLVER_DEFAULTS
+    assert (args.grading, args.exact_volume, args.element, args.max_steps) == (
+        d["grading"], d["exact_volume"], d["element"], d["max_steps"])
+    assert (td.DEFAULT_MESH_LEVEL, td.DEFAULT_TOLERANCE) == (d["mesh_level"], d["tolerance"])
+    case_defaults = {f.name: f.default for f in dataclasses.fields(td.Case)}
+    assert (args.knockdown, args.ramp_time, args.contact) == (
+        case_defaults["knockdown"], case_defaults["ramp_time_s"], case_defaults["contact"])
+    native = inspect.signature(td.Simulation).parameters
+    for name in ("knockdown", "ramp_time_s", "contact", "tied_planes"):
+        assert native[name].default == case_defaults[name], name
+    for name in d:
+        assert native[name].default is None, name  # the core's own default

@@ -63,7 +63,7 @@ def test_a_failed_write_names_the_file_keeps_what_was_written_and_leaves_no_trun
     assert e.value.filename == str(out / "fields_rho0.550.vtu") and e.value.errno == errno.ENOSPC
     assert "cannot write" in str(e.value) and "No space left" in str(e.value)
     # The result travels with the error; the curve and the summary were written and agree.
-    result = e.value.result  # type: ignore[attr-defined]
+    result = e.value.result
     s = json.loads((out / "summary.json").read_text())
     assert s["status"] == "reached_density" and s["steps"] == len(rows(out / "curve.csv")) - 1
     assert s["final_density"] == pytest.approx(result.rel_density[-1], rel=1e-12)

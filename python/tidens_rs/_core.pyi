@@ -43,7 +43,17 @@ class TidensError(Exception):
 class ConvergenceError(TidensError):
     """Newton failed at the smallest allowed time step, the step limit was
     reached, or a linear solve failed. The simulation keeps its last
-    converged state, so its curve up to the failure is still available."""
+    converged state, so its curve up to the failure is still available.
+    Attributes: time_s and step (where it happened), dt_s (the last step
+    size tried), reason (element, linear_algebra, non_finite_residual,
+    plane_penetration, contact_penetration, newton_iterations, line_search,
+    step_limit, material), result (the partial result, from Case.run)."""
+
+    time_s: float | None
+    step: int | None
+    dt_s: float | None
+    reason: str | None
+    result: Any
 
 class UnsupportedError(TidensError):
     """A scene this version cannot simulate."""

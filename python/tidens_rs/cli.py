@@ -10,6 +10,7 @@ rho = 0.9).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import re
 import sys
 import threading
@@ -22,8 +23,9 @@ from ._core import CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, Ti
 from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings
 from .result import MARK_DENSITIES, Result
 
-# The solver defaults, as the Python API has them (the core's).
+# The solver defaults, as the Python API has them (the core's), and the case's.
 _DEFAULTS = SolverSettings()
+_CASE_DEFAULTS = {f.name: f.default for f in dataclasses.fields(Case)}
 
 # The option of each Python argument, so that errors name what was typed.
 _OPTION_OF = {
@@ -106,7 +108,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--radius", type=float, help="particle radius a [mm], the large one for sc2 (default 0.05; the curve does not depend on it)")
     g.add_argument("--size-ratio", type=float, help=f"sc2 only: radius of the large particles over the small ones, in [1, 1 + sqrt 2 = 2.414] (default {cells.DEFAULT_SIZE_RATIO:g})")
     g = p.add_argument_group("contact")
-    g.add_argument("--contact", choices=CONTACT_MODES, default=CONTACT_MODES[0], help="between particles: frictionless sliding (default) or tied once closed (no sliding)")
+    g.add_argument("--contact", choices=CONTACT_MODES, default=_CASE_DEFAULTS["contact"], help="between particles: frictionless sliding (default) or tied once closed (no sliding)")
     g.add_argument("--tied-planes", action="store_true", help="sensitivity option, not the default: tie particle surface nodes to the rigid die planes they touch (rough walls); by default the planes are frictionless mirror planes, as the symmetry of the packing requires")
     g = p.add_argument_group("material")
     g.add_argument("--material", choices=materials.PRESET_NAMES, help="preset (default ti64-creep-1293k)")
@@ -116,8 +118,8 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--nu", dest="poisson", type=float, help=f"Poisson's ratio (default {materials.DEFAULT_POISSON:g})")
     g = p.add_argument_group("load")
     g.add_argument("--stress", type=float, required=True, help="applied piston stress sigma [MPa]")
-    g.add_argument("--knockdown", type=float, default=1.0, help="die-wall knock-down factor f, the cell feels f*sigma (default 1)")
-    g.add_argument("--ramp-time", type=float, default=1.0, help="linear ramp of the stress [s] (default 1)")
+    g.add_argument("--knockdown", type=float, default=_CASE_DEFAULTS["knockdown"], help=f"die-wall knock-down factor f, the cell feels f*sigma (default {_CASE_DEFAULTS['knockdown']:g})")
+    g.add_argument("--ramp-time", type=float, default=_CASE_DEFAULTS["ramp_time_s"], help=f"linear ramp of the stress [s] (default {_CASE_DEFAULTS['ramp_time_s']:g})")
     g = p.add_argument_group("stop")
     g.add_argument("--until-density", type=float, help="stop at this relative density")
     g.add_argument("--until-time", type=float, help="stop at this time [s]")

@@ -55,6 +55,8 @@ class OutputError(OSError):
     What was written before it is kept; the run's result, if any, is in the
     ``result`` attribute."""
 
+    result: Any = None
+
     def __str__(self) -> str:
         return f"cannot write {self.filename}: {self.strerror}"
 

@@ -25,7 +25,11 @@ create_exception!(
     TidensError,
     "Newton failed at the smallest allowed time step, the step limit was\n\
      reached, or a linear solve failed. The simulation keeps its last\n\
-     converged state, so its curve up to the failure is still available."
+     converged state, so its curve up to the failure is still available.\n\
+     Attributes: time_s and step (where it happened), dt_s (the last step\n\
+     size tried), reason (element, linear_algebra, non_finite_residual,\n\
+     plane_penetration, contact_penetration, newton_iterations, line_search,\n\
+     step_limit, material), result (the partial result, from Case.run)."
 );
 create_exception!(
     tidens_rs._core,
@@ -131,6 +135,56 @@ pub(crate) fn solver_error(err: SolverError, phase: Phase) -> PyErr {
         SolverError::Linear(_)
         | SolverError::NoConvergence { .. }
         | SolverError::StepLimit { .. } => ConvergenceError::new_err(err.to_string()),
+        SolverError::Internal(_) => TidensError::new_err(err.to_string()),
+    }
+}
+
+/// The attributes of a ConvergenceError, None on the class: when it
+/// happened (`time_s`, `step`), the last step size tried (`dt_s`), the kind
+/// of failure (`reason`), and the partial result (`result`, set by the
+/// Python layer).
+pub(crate) const CONVERGENCE_ATTRIBUTES: [&str; 5] = ["time_s", "step", "dt_s", "reason", "result"];
+
+/// A failed step of a running simulation, converted once the GIL is held
+/// (the attributes of the exception need it).
+pub(crate) enum StepError {
+    Solver(SolverError),
+    Poisoned,
+}
+
+impl StepError {
+    pub(crate) fn into_py(self, py: Python<'_>) -> PyErr {
+        let err = match self {
+            StepError::Poisoned => return poisoned(),
+            StepError::Solver(err) => err,
+        };
+        let (time, step, dt, reason): (Option<f64>, Option<usize>, Option<f64>, &str) = match &err {
+            SolverError::NoConvergence {
+                time,
+                step,
+                dt,
+                reason,
+            } => (Some(*time), Some(*step), Some(*dt), reason.kind()),
+            SolverError::StepLimit {
+                max_steps, time, ..
+            } => (Some(*time), Some(*max_steps), None, "step_limit"),
+            SolverError::Linear(_) => (None, None, None, "linear_algebra"),
+            SolverError::Fem(_) => (None, None, None, "element"),
+            SolverError::Material(_) => (None, None, None, "material"),
+            _ => return solver_error(err, Phase::Run),
+        };
+        let py_err = solver_error(err, Phase::Run);
+        let value = py_err.value(py);
+        let set = || -> PyResult<()> {
+            value.setattr("time_s", time)?;
+            value.setattr("step", step)?;
+            value.setattr("dt_s", dt)?;
+            value.setattr("reason", reason)
+        };
+        match set() {
+            Ok(()) => py_err,
+            Err(e) => e,
+        }
     }
 }
 

@@ -35,6 +35,11 @@ mod _core {
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+        // The attributes every ConvergenceError has, None until set.
+        let convergence = m.py().get_type::<ConvergenceError>();
+        for name in super::errors::CONVERGENCE_ATTRIBUTES {
+            convergence.setattr(name, m.py().None())?;
+        }
         // The material preset names, in the order of the presets table (docs/model.md).
         m.add("PRESET_NAMES", Preset::ALL.map(Preset::name).to_vec())?;
         // The `contact` choices of Simulation, the default first.

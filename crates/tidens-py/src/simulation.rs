@@ -12,7 +12,7 @@ use crate::cell::PyCell;
 use crate::convert::{
     columns_dict, curve_columns, fields_dict, point_dict, stats_dict, status_name,
 };
-use crate::errors::{Phase, mesh_level_error, parameter_error, poisoned, solver_error};
+use crate::errors::{Phase, StepError, mesh_level_error, parameter_error, poisoned, solver_error};
 use crate::material::PyMaterial;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -361,12 +361,12 @@ impl PySimulation {
     }
 
     /// One step of the core simulation; to be called with the GIL released.
-    fn step(&self) -> PyResult<CurvePoint> {
-        let mut sim = self.sim.lock().map_err(|_| poisoned())?;
+    fn step(&self) -> Result<CurvePoint, StepError> {
+        let mut sim = self.sim.lock().map_err(|_| StepError::Poisoned)?;
         let point = sim.advance().cloned();
         // Failed steps change the totals too (failed attempts).
         self.progress().refresh(&sim);
-        point.map_err(|e| solver_error(e, Phase::Run))
+        point.map_err(StepError::Solver)
     }
 }
 
@@ -493,7 +493,7 @@ impl PySimulation {
     /// Once stopped, returns the last point again. Raises ConvergenceError if
     /// the step fails; the state stays at the last converged step.
     fn advance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let point = py.detach(|| self.step())?;
+        let point = py.detach(|| self.step()).map_err(|e| e.into_py(py))?;
         point_dict(py, &point)
     }
 
@@ -506,7 +506,7 @@ impl PySimulation {
     #[pyo3(signature = (callback = None))]
     fn run(&self, py: Python<'_>, callback: Option<Bound<'_, PyAny>>) -> PyResult<&'static str> {
         while self.progress().status == Status::Running {
-            let point = py.detach(|| self.step())?;
+            let point = py.detach(|| self.step()).map_err(|e| e.into_py(py))?;
             py.check_signals()?;
             if let Some(callback) = &callback {
                 let answer = callback.call1((point_dict(py, &point)?,))?;

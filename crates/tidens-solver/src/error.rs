@@ -22,9 +22,9 @@ pub enum SolverError {
     Material(#[from] tidens_material::MaterialError),
     #[error(transparent)]
     Fem(#[from] tidens_fem::FemError),
-    /// The sparse factorisation failed (singular system).
+    /// The sparse linear algebra failed.
     #[error("linear solve failed: {0}")]
-    Linear(String),
+    Linear(#[from] LinearError),
     /// Newton failed even at the smallest allowed time step.
     #[error(
         "no convergence at t = {time:.6e} s (step {step}): time step cut to {dt:.3e} s without Newton converging ({reason})"
@@ -33,8 +33,11 @@ pub enum SolverError {
         time: f64,
         step: usize,
         dt: f64,
-        reason: String,
+        reason: StepFailure,
     },
+    /// A broken invariant of the solver (a bug: please report it).
+    #[error("internal error: {0}")]
+    Internal(&'static str),
     /// The step limit was reached before the stop condition.
     #[error("step limit {max_steps} reached at t = {time:.6e} s, density {density:.5}")]
     StepLimit {
@@ -50,6 +53,77 @@ impl SolverError {
             name,
             value,
             allowed: allowed.into(),
+        }
+    }
+}
+
+/// What went wrong in the sparse linear algebra.
+#[derive(Error, Debug, Clone, PartialEq)]
+pub enum LinearError {
+    /// A factor or workspace larger than the memory available.
+    #[error("out of memory: the {what} needs {gigabytes:.2} GB; use a coarser mesh level")]
+    OutOfMemory { what: &'static str, gigabytes: f64 },
+    /// faer refused the symbolic factorisation (its message).
+    #[error("symbolic factorisation: {0}")]
+    Symbolic(String),
+    /// The factor gave a non-finite solution: the tangent is singular.
+    #[error("the solve gave a non-finite solution (singular tangent)")]
+    Singular,
+    /// A solve asked for before any factorisation (a bug of the caller).
+    #[error("{0} before a factorisation")]
+    NotFactorized(&'static str),
+    /// A right-hand side of the wrong length (a bug of the caller).
+    #[error("right-hand side of length {got} for a system of size {size}")]
+    Size { got: usize, size: usize },
+}
+
+/// Why Newton gave up on one attempt of a step; the step is then cut back,
+/// and the last reason is reported if even the smallest step fails.
+#[derive(Error, Debug, Clone, PartialEq)]
+pub enum StepFailure {
+    /// An element turned inside out (or another element failure).
+    #[error(transparent)]
+    Element(#[from] tidens_fem::FemError),
+    /// The factorisation or a solve failed.
+    #[error(transparent)]
+    Linear(#[from] LinearError),
+    /// The residual became NaN or infinite.
+    #[error("non-finite residual")]
+    NonFiniteResidual,
+    /// Newton converged with a node inside a rigid plane.
+    #[error("converged with a node {depth:.3e} mm inside a rigid plane")]
+    PlanePenetration { depth: f64 },
+    /// The augmented Lagrangian did not bring particle penetration within tolerance.
+    #[error(
+        "particle contact penetration {penetration:.3e} mm after {augmentations} augmentations"
+    )]
+    ContactPenetration {
+        penetration: f64,
+        augmentations: usize,
+    },
+    /// The iteration limit came first.
+    #[error("{iterations} Newton iterations, residual {residual:.3e} N > {tolerance:.3e} N")]
+    Iterations {
+        iterations: usize,
+        residual: f64,
+        tolerance: f64,
+    },
+    /// Every point the line search tried inverted an element.
+    #[error("every line-search point inverts an element")]
+    LineSearch,
+}
+
+impl StepFailure {
+    /// A short name of the kind of failure (for scripts: `ConvergenceError.reason`).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            StepFailure::Element(_) => "element",
+            StepFailure::Linear(_) => "linear_algebra",
+            StepFailure::NonFiniteResidual => "non_finite_residual",
+            StepFailure::PlanePenetration { .. } => "plane_penetration",
+            StepFailure::ContactPenetration { .. } => "contact_penetration",
+            StepFailure::Iterations { .. } => "newton_iterations",
+            StepFailure::LineSearch => "line_search",
         }
     }
 }

@@ -5,7 +5,7 @@
 use crate::simulation::Simulation;
 use std::time::Instant;
 use tidens_contact::ContactEvaluation;
-use tidens_fem::BodyEvaluation;
+use tidens_fem::{BodyEvaluation, FemError};
 
 /// Element and contact contributions at one configuration.
 pub struct Evaluation {
@@ -42,12 +42,9 @@ impl Simulation {
         u: &[f64],
         dt: f64,
         tangent: bool,
-    ) -> Result<Evaluation, String> {
+    ) -> Result<Evaluation, FemError> {
         let t0 = Instant::now();
-        let body = self
-            .body
-            .evaluate(u, dt, tangent)
-            .map_err(|e| e.to_string())?;
+        let body = self.body.evaluate(u, dt, tangent)?;
         let mut f_int = self.assembler.internal_force(&body);
         let t1 = Instant::now();
         self.stats.evaluation_seconds += (t1 - t0).as_secs_f64();

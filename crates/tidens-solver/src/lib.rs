@@ -29,7 +29,7 @@ mod simulation;
 mod step_control;
 
 pub use cell::{ASPECT_RANGE, Cell, DEFAULT_SIZE_RATIO, Octant, RADIUS_RANGE, SIZE_RATIO_RANGE};
-pub use error::SolverError;
+pub use error::{LinearError, SolverError, StepFailure};
 pub use load::LoadHistory;
 pub use load_path::TOUCH_TOLERANCE;
 pub use output::{CurvePoint, Fields, RunStats, Status};

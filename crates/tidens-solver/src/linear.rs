@@ -43,7 +43,7 @@
 //! times slower), and METIS options (separators tried, balance, seed: within
 //! 3 %).
 
-use crate::error::SolverError;
+use crate::error::LinearError;
 use crate::ordering::nested_dissection;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::perm::PermRef;
@@ -124,7 +124,7 @@ impl Default for LinearSolver {
 fn symbolic_cholesky(
     sym: SymbolicSparseColMatRef<'_, usize>,
     ordering: FillOrdering,
-) -> Result<SymbolicCholesky<usize>, SolverError> {
+) -> Result<SymbolicCholesky<usize>, LinearError> {
     let fwd = match ordering {
         FillOrdering::NestedDissection => nested_dissection(sym.col_ptr(), sym.row_idx()),
         FillOrdering::Amd => None,
@@ -143,17 +143,17 @@ fn symbolic_cholesky(
         _ => SymmetricOrdering::Amd,
     };
     factorize_symbolic_cholesky(sym, Side::Lower, perm, CholeskySymbolicParams::default())
-        .map_err(|e| SolverError::Linear(format!("symbolic factorisation: {e:?}")))
+        .map_err(|e| LinearError::Symbolic(format!("{e:?}")))
 }
 
-fn out_of_memory(what: &str, bytes: usize) -> SolverError {
-    SolverError::Linear(format!(
-        "out of memory: the {what} needs {:.2} GB; use a coarser mesh level",
-        bytes as f64 / 1e9
-    ))
+fn out_of_memory(what: &'static str, bytes: usize) -> LinearError {
+    LinearError::OutOfMemory {
+        what,
+        gigabytes: bytes as f64 / 1e9,
+    }
 }
 
-fn buffer(req: StackReq, what: &str) -> Result<MemBuffer, SolverError> {
+fn buffer(req: StackReq, what: &'static str) -> Result<MemBuffer, LinearError> {
     MemBuffer::try_new(req).map_err(|_| out_of_memory(what, req.size_bytes()))
 }
 
@@ -196,7 +196,7 @@ impl LinearSolver {
     /// Factorises `A` (its lower triangle is read): Cholesky, or LBL^T when
     /// Cholesky fails; after a failed Cholesky the next three factorisations
     /// use LBL^T directly.
-    pub fn factorize(&mut self, sys: &SparseSystem) -> Result<Factorization, SolverError> {
+    pub fn factorize(&mut self, sys: &SparseSystem) -> Result<Factorization, LinearError> {
         self.numeric = Numeric::None;
         let n = sys.dim();
         let sym = SymbolicSparseColMatRef::new_checked(n, n, sys.col_ptr(), None, sys.row_idx());
@@ -215,7 +215,7 @@ impl LinearSolver {
         let symbolic = self
             .symbolic
             .as_ref()
-            .ok_or_else(|| SolverError::Linear("no symbolic factorisation".into()))?;
+            .ok_or(LinearError::NotFactorized("a numeric factorisation"))?;
         let par = Par::Seq;
         // Indefinite tangents come in runs (the iterates of a hard step, with
         // large plastic increments): a failed Cholesky costs up to a whole
@@ -274,17 +274,17 @@ impl LinearSolver {
 
     /// Solves `A x = b` in place with the current factor (`rhs` holds `b` on
     /// entry, `x` on exit).
-    pub fn solve(&mut self, rhs: &mut [f64]) -> Result<(), SolverError> {
+    pub fn solve(&mut self, rhs: &mut [f64]) -> Result<(), LinearError> {
         let symbolic = self
             .symbolic
             .as_ref()
-            .ok_or_else(|| SolverError::Linear("solve before factorisation".into()))?;
+            .ok_or(LinearError::NotFactorized("a solve"))?;
         let n = symbolic.nrows();
         if rhs.len() != n {
-            return Err(SolverError::Linear(format!(
-                "right-hand side of length {} for a system of size {n}",
-                rhs.len()
-            )));
+            return Err(LinearError::Size {
+                got: rhs.len(),
+                size: n,
+            });
         }
         let par = Par::Seq;
         let mut scratch = buffer(
@@ -294,7 +294,7 @@ impl LinearSolver {
         let stack = MemStack::new(&mut scratch);
         let rhs_mat = MatMut::from_column_major_slice_mut(rhs, n, 1);
         match &self.numeric {
-            Numeric::None => return Err(SolverError::Linear("no numeric factor".into())),
+            Numeric::None => return Err(LinearError::NotFactorized("a solve")),
             Numeric::Llt => LltRef::new(symbolic, &self.values).solve_in_place_with_conj(
                 Conj::No,
                 rhs_mat,
@@ -311,9 +311,7 @@ impl LinearSolver {
         if rhs.iter().all(|v| v.is_finite()) {
             Ok(())
         } else {
-            Err(SolverError::Linear(
-                "the solve gave a non-finite solution (singular tangent)".into(),
-            ))
+            Err(LinearError::Singular)
         }
     }
 }

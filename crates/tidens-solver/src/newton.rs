@@ -10,6 +10,7 @@
 //! plane, every node that touches another particle is paired, and the
 //! particle penetration is below its tolerance.
 
+use crate::error::{LinearError, StepFailure};
 use crate::evaluation::Evaluation;
 use crate::line_search::{self, Trial};
 use crate::simulation::Simulation;
@@ -40,7 +41,7 @@ pub(crate) struct Solved {
 
 /// A failed Newton solve.
 pub(crate) struct Failed {
-    pub reason: String,
+    pub reason: StepFailure,
     pub iterations: usize,
 }
 
@@ -131,7 +132,7 @@ impl Simulation {
 
     /// Assembles the tangent of `eval` (growing the pattern for new contact
     /// couplings) and factorises it.
-    fn refactor(&mut self, eval: &Evaluation, map: &[usize], dt: f64) -> Result<(), String> {
+    fn refactor(&mut self, eval: &Evaluation, map: &[usize], dt: f64) -> Result<(), LinearError> {
         let t0 = std::time::Instant::now();
         if !self.assembler.assemble(eval, map) {
             if let Some(c) = &self.contact {
@@ -155,7 +156,7 @@ impl Simulation {
             }
             Err(e) => {
                 self.factor = None;
-                Err(e.to_string())
+                Err(e)
             }
         }
     }
@@ -174,7 +175,7 @@ impl Simulation {
         let gap_tol = 1e-8 * self.lengths.iter().cloned().fold(0.0, f64::max);
         let n = self.constraints.dof_count();
         self.constraints.reset_flips();
-        let fail = |reason: String, iterations: usize| Failed { reason, iterations };
+        let fail = |reason: StepFailure, iterations: usize| Failed { reason, iterations };
         let (mut u, mut piston) = self.predict(dt);
         if debug_enabled() {
             eprintln!("  step from t = {:.6e} s, dt = {dt:.4e} s", self.state.time);
@@ -188,7 +189,9 @@ impl Simulation {
             .factor
             .as_ref()
             .is_none_or(|k| (dt / k.dt).ln().abs() > FRESH_TANGENT_STEP_RATIO.ln());
-        let mut eval = self.evaluate(&u, dt, stale).map_err(|e| fail(e, 0))?;
+        let mut eval = self
+            .evaluate(&u, dt, stale)
+            .map_err(|e| fail(e.into(), 0))?;
         let mut refactor = stale || !self.linear.has_factor();
         let mut iterations = 0;
         let mut active_set_updates = 0;
@@ -218,13 +221,13 @@ impl Simulation {
                 );
             }
             if !r_norm.is_finite() {
-                return Err(fail("non-finite residual".into(), iterations));
+                return Err(fail(StepFailure::NonFiniteResidual, iterations));
             }
             if offsets.is_empty() && r_norm <= tol {
                 let penetration = self.constraints.max_penetration(&u, piston);
                 if penetration > gap_tol {
                     return Err(fail(
-                        format!("converged with a node {penetration:.3e} mm inside a rigid plane"),
+                        StepFailure::PlanePenetration { depth: penetration },
                         iterations,
                     ));
                 }
@@ -233,7 +236,7 @@ impl Simulation {
                 if self.pair_contacts(&u, true) > 0 {
                     eval = self
                         .evaluate(&u, dt, false)
-                        .map_err(|e| fail(e, iterations))?;
+                        .map_err(|e| fail(e.into(), iterations))?;
                     continue;
                 }
                 // The multipliers take each converged step's pressures (see
@@ -251,9 +254,10 @@ impl Simulation {
                 }
                 if augmentations >= MAX_AUGMENTATIONS {
                     return Err(fail(
-                        format!(
-                            "particle contact penetration {violation:.3e} mm after {MAX_AUGMENTATIONS} augmentations"
-                        ),
+                        StepFailure::ContactPenetration {
+                            penetration: violation,
+                            augmentations: MAX_AUGMENTATIONS,
+                        },
                         iterations,
                     ));
                 }
@@ -264,14 +268,16 @@ impl Simulation {
                 }
                 eval = self
                     .evaluate(&u, dt, false)
-                    .map_err(|e| fail(e, iterations))?;
+                    .map_err(|e| fail(e.into(), iterations))?;
                 continue;
             }
             if iterations >= self.settings.newton.max_iterations {
                 return Err(fail(
-                    format!(
-                        "{iterations} Newton iterations, residual {r_norm:.3e} N > {tol:.3e} N"
-                    ),
+                    StepFailure::Iterations {
+                        iterations,
+                        residual: r_norm,
+                        tolerance: tol,
+                    },
                     iterations,
                 ));
             }
@@ -284,10 +290,10 @@ impl Simulation {
                 if !eval.has_tangent() {
                     eval = self
                         .evaluate(&u, dt, true)
-                        .map_err(|e| fail(e, iterations))?;
+                        .map_err(|e| fail(e.into(), iterations))?;
                 }
                 self.refactor(&eval, &map, dt)
-                    .map_err(|e| fail(e, iterations))?;
+                    .map_err(|e| fail(e.into(), iterations))?;
             }
             let mut du: Vec<f64> = r.iter().map(|x| -x).collect();
             if !offsets.is_empty() {
@@ -303,7 +309,7 @@ impl Simulation {
             let t0 = std::time::Instant::now();
             let solved = self.linear.solve(&mut du);
             self.stats.linear_seconds += t0.elapsed().as_secs_f64();
-            solved.map_err(|e| fail(e.to_string(), iterations))?;
+            solved.map_err(|e| fail(e.into(), iterations))?;
             let r0_sq: f64 = r.iter().map(|x| x * x).sum();
             let best = line_search::backtrack(r0_sq, tol, |s| {
                 let mut ut = u.clone();
@@ -338,10 +344,7 @@ impl Simulation {
                 step, norm, point, ..
             }) = best
             else {
-                return Err(fail(
-                    "every line-search point inverts an element".into(),
-                    iterations,
-                ));
+                return Err(fail(StepFailure::LineSearch, iterations));
             };
             if debug_enabled() {
                 eprintln!("      line search: step {step} |R| {norm:.3e}");

@@ -51,6 +51,7 @@ pub(crate) struct ConvergedState {
 
 /// The contact state of the planes and of the particles, saved before a
 /// step is tried so that a rejected or failed attempt can be undone.
+#[derive(Clone, Debug, PartialEq)]
 struct ContactSnapshot {
     planes: PlaneContactState,
     particles: Option<tidens_contact::StateSnapshot>,
@@ -383,7 +384,7 @@ impl Simulation {
             return self
                 .curve
                 .last()
-                .ok_or_else(|| SolverError::Linear("empty curve".into()));
+                .ok_or(SolverError::Internal("the curve lost its initial point"));
         }
         if self.stats.steps >= self.settings.max_steps {
             return Err(SolverError::StepLimit {
@@ -428,7 +429,7 @@ impl Simulation {
         self.check_stop();
         self.curve
             .last()
-            .ok_or_else(|| SolverError::Linear("empty curve".into()))
+            .ok_or(SolverError::Internal("the curve lost its initial point"))
     }
 
     /// Step control on a converged step: accepts it (commits the material
@@ -503,7 +504,7 @@ impl Simulation {
     /// symmetric system Newton factorises (for diagnostics and benchmarks).
     pub fn assemble_tangent(&mut self, dt: f64) -> Result<&SparseSystem, SolverError> {
         let u = self.state.u.clone();
-        let eval = self.evaluate(&u, dt, true).map_err(SolverError::Linear)?;
+        let eval = self.evaluate(&u, dt, true)?;
         let map = self.constraints.equation_map();
         if !self.assembler.assemble(&eval, &map) {
             if let Some(c) = &self.contact {
@@ -513,5 +514,59 @@ impl Simulation {
             self.assembler.assemble(&eval, &map);
         }
         Ok(self.assembler.system())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{Cell, LoadHistory, MeshOptions, NewtonSettings, Preset};
+
+    /// A failed attempt changes the contact state (planes caught or
+    /// released, particle contact pressures), and the cut back restores it
+    /// exactly, so the retry starts from the last converged step.
+    #[test]
+    fn a_failed_attempt_is_undone_exactly() {
+        let scene = Scene::from_cell(
+            &Cell::bcc(0.05, 1.0).unwrap(),
+            &MeshOptions {
+                level: 1,
+                ..MeshOptions::default()
+            },
+        )
+        .unwrap();
+        let mut settings = Settings::new(LoadHistory {
+            stress: 15.0,
+            knockdown: 1.0,
+            ramp_time: 1.0,
+        });
+        settings.until_density = Some(0.9);
+        settings.tolerance = 0.05;
+        let mut sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
+        while sim.rel_density() < 0.72 {
+            sim.advance().unwrap();
+        }
+        let before = sim.contact_snapshot();
+        assert!(before.particles.as_ref().is_some_and(|p| !p.is_empty()));
+        let u = sim.state.u.clone();
+        // A step 10 times the proposed one with two iterations: it fails
+        // after the active sets moved.
+        sim.settings.newton.max_iterations = 2;
+        let dt = 10.0 * sim.propose_dt();
+        let failed = sim.solve_step(dt);
+        assert!(failed.is_err());
+        assert!(
+            sim.contact_snapshot() != before,
+            "the attempt must have moved the contact state for this test to test anything"
+        );
+        sim.restore_contact(before.clone());
+        assert_eq!(sim.contact_snapshot(), before);
+        assert_eq!(
+            sim.state.u, u,
+            "the converged displacement is never touched"
+        );
+        // And the run goes on from there.
+        sim.settings.newton.max_iterations = NewtonSettings::default().max_iterations;
+        assert!(sim.advance().is_ok());
     }
 }

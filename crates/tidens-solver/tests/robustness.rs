@@ -1,0 +1,121 @@
+//! Failed Newton attempts: cut back, restore, go on.
+
+use tidens_solver::{
+    Cell, CurvePoint, LoadHistory, MeshOptions, Preset, RunStats, Scene, Settings, Simulation,
+    SolverError, Status, StepFailure,
+};
+
+/// The bcc cell at level 1 pressed to `until` with a Newton iteration limit;
+/// the curve, the totals, and the worst relative gap between the contact
+/// force on the top particle and the piston force over the steps.
+fn bcc(max_iterations: usize, until: f64) -> (Vec<CurvePoint>, RunStats, f64) {
+    let scene = Scene::from_cell(
+        &Cell::bcc(0.05, 1.0).unwrap(),
+        &MeshOptions {
+            level: 1,
+            ..MeshOptions::default()
+        },
+    )
+    .unwrap();
+    let mut settings = Settings::new(LoadHistory {
+        stress: 15.0,
+        knockdown: 1.0,
+        ramp_time: 1.0,
+    });
+    settings.until_density = Some(until);
+    settings.tolerance = 0.02;
+    settings.newton.max_iterations = max_iterations;
+    settings.newton.residual_tolerance = 1e-7;
+    let mut sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
+    let area = scene.lengths[0] * scene.lengths[1];
+    let mut worst: f64 = 0.0;
+    while sim.status() == Status::Running {
+        let p = sim.advance().unwrap().clone();
+        let piston = p.cell_stress * area;
+        let (contact, _) = sim.particle_forces(&scene)[1];
+        worst = worst.max((contact[2] - piston).abs() / piston);
+    }
+    (sim.curve().to_vec(), sim.stats(), worst)
+}
+
+fn time_at(curve: &[CurvePoint], rho: f64) -> f64 {
+    let k = curve.iter().position(|p| p.rel_density >= rho).unwrap();
+    let (a, b) = (&curve[k - 1], &curve[k]);
+    a.time + (rho - a.rel_density) / (b.rel_density - a.rel_density) * (b.time - a.time)
+}
+
+/// With an iteration limit far below what the contact steps need, many
+/// attempts fail: each is cut back from the last converged state, with the
+/// body, the rigid-plane contact set and the particle contact multipliers
+/// as they were. The run goes on, keeps the contact force equal to the
+/// piston force at every step, and ends where the unhindered run ends,
+/// within the time tolerance. (Were the state not restored, the failed
+/// attempts' contact multipliers or plastic strains would leak into the
+/// next attempt and the balance or the times would drift.)
+#[test]
+fn failed_newton_attempts_cut_back_restore_the_state_and_go_on() {
+    let (free, free_stats, _) = bcc(25, 0.75);
+    let (hindered, stats, worst) = bcc(8, 0.75);
+    eprintln!(
+        "failed attempts {} (free {}), steps {} (free {})",
+        stats.failed_attempts, free_stats.failed_attempts, stats.steps, free_stats.steps
+    );
+    assert!(
+        stats.failed_attempts >= 5 && stats.failed_attempts > 3 * free_stats.failed_attempts,
+        "failed attempts: {} hindered, {} free",
+        stats.failed_attempts,
+        free_stats.failed_attempts
+    );
+    assert!(worst < 1e-5, "contact force off the piston's by {worst:e}");
+    for rho in [0.72, 0.75] {
+        let (a, b) = (time_at(&free, rho), time_at(&hindered, rho));
+        assert!((a - b).abs() < 0.02 * a, "t({rho}): {a} free, {b} hindered");
+    }
+}
+
+/// An attempt that cannot succeed at any step size fails with the typed
+/// reason, where and when it happened, and leaves the last converged state.
+#[test]
+fn a_step_that_fails_at_every_size_reports_a_typed_reason() {
+    let scene = Scene::from_cell(
+        &Cell::sc(0.05, 1.0).unwrap(),
+        &MeshOptions {
+            level: 1,
+            ..MeshOptions::default()
+        },
+    )
+    .unwrap();
+    let mut settings = Settings::new(LoadHistory {
+        stress: 10.0,
+        knockdown: 1.0,
+        ramp_time: 1.0,
+    });
+    settings.until_density = Some(0.8);
+    // One iteration to a residual near round-off: creep makes the first
+    // step nonlinear, so one Newton iteration cannot get there.
+    settings.newton.max_iterations = 1;
+    settings.newton.residual_tolerance = 1e-14;
+    let mut sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
+    let err = sim.advance().unwrap_err();
+    match &err {
+        SolverError::NoConvergence {
+            time, step, reason, ..
+        } => {
+            assert_eq!((*time, *step), (0.0, 1));
+            // The last attempt's reason, typed (at the smallest steps the
+            // iteration limit, or the solve of a tangent stiffened by 1/dt).
+            assert!(
+                matches!(
+                    reason,
+                    StepFailure::Iterations { iterations: 1, .. } | StepFailure::Linear(_)
+                ),
+                "{reason:?}"
+            );
+            assert!(err.to_string().contains(&reason.to_string()));
+        }
+        other => panic!("{other}"),
+    }
+    // The state is the initial one, still.
+    assert_eq!(sim.curve().len(), 1);
+    assert_eq!(sim.curve()[0].time, 0.0);
+}
