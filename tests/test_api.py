@@ -2,7 +2,9 @@
 
 import dataclasses
 import math
+import sys
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -112,26 +114,30 @@ def test_tmp_formula_agrees_with_the_preset() -> None:
 
 
 def test_solves_release_the_gil(quick_case: td.Case) -> None:
-    sim = dataclasses.replace(quick_case, solver=td.SolverSettings(mesh_level=2)).simulation(until_density=0.9)
-    done = threading.Event()
-    steps = 0
-
-    def work() -> None:
-        nonlocal steps
-        while not done.is_set() and steps < 15:
-            sim.advance()
-            steps += 1
-        done.set()
-
-    th = threading.Thread(target=work)
-    count = 0
-    th.start()
-    while not done.is_set():
-        count += 1
-    th.join()
-    # Had the solver held the GIL, this loop would have stalled for the
-    # whole of each step.
-    assert steps > 0 and count > 10_000
+    # One native call runs the whole solve in a second thread; this thread
+    # ticks meanwhile. Had the solver held the GIL for a step, no tick could
+    # happen during it: the longest gap between ticks would be at least a
+    # step's duration. Released, the gaps are the interpreter's hand-over
+    # time (the switch interval, shortened here), far shorter than a step.
+    sim = dataclasses.replace(quick_case, solver=td.SolverSettings(mesh_level=2, tolerance=0.05)).simulation(until_density=0.58)
+    old_interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-4)
+    try:
+        th = threading.Thread(target=sim.run)
+        ticks = [time.perf_counter()]
+        th.start()
+        while th.is_alive():
+            ticks.append(time.perf_counter())
+        th.join()
+    finally:
+        sys.setswitchinterval(old_interval)
+    solve = ticks[-1] - ticks[0]
+    steps = sim.stats()["steps"]
+    gaps = np.diff(ticks)
+    assert sim.status == "reached_density" and steps > 10
+    step_time = solve / steps
+    assert gaps.max() < 0.5 * step_time, (gaps.max(), step_time)
+    assert len(ticks) > 100 * steps
 
 
 def test_tet10_meshes_the_sphere_octant_almost_exactly_and_runs(tmp_path: Path) -> None:

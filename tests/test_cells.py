@@ -282,3 +282,15 @@ def test_size_ratio_is_for_sc2_only() -> None:
     assert td.cells.by_name("sc2", size_ratio=2.0).rho0 == pytest.approx(sc2_rho0(2.0), rel=1e-13)
     with pytest.raises(ValueError, match="size_ratio"):
         td.cells.sc2(size_ratio=0.5)
+
+
+def test_the_sc2_default_size_ratio_is_the_papers_everywhere() -> None:
+    # The paper's 1.566: the core's constant, the native and the Python
+    # signatures' defaults, and what a default sc2 cell is built with.
+    import inspect
+
+    assert td.cells.DEFAULT_SIZE_RATIO == 1.566
+    assert inspect.signature(td.cells.sc2).parameters["size_ratio"].default == td.cells.DEFAULT_SIZE_RATIO
+    assert inspect.signature(td.Cell.sc2).parameters["size_ratio"].default == td.cells.DEFAULT_SIZE_RATIO
+    assert td.cells.size_ratio_of(td.cells.sc2()) == pytest.approx(1.566, rel=1e-14)
+    assert td.cells.size_ratio_of(td.cells.by_name("sc2")) == pytest.approx(1.566, rel=1e-14)

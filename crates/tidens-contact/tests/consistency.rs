@@ -93,6 +93,46 @@ fn triangle_contact_tangent_equals_finite_differences_of_the_force() {
     );
 }
 
+/// Tied contact: the nodes pressed in are tied where they touch, then the
+/// patches slide against each other (the upper one moved along x and y), so
+/// each tie carries a tangential and a normal gap. The vector penalty's
+/// tangent must be the Hessian of its energy too.
+#[test]
+fn tied_contact_tangent_equals_finite_differences_of_the_force() {
+    for triangles in [false, true] {
+        let (nodes, lower, upper) = patches(0.06);
+        let surface = |faces: &[[usize; 4]], nodes: &[[f64; 3]]| {
+            if triangles {
+                ContactSurface::from_triangles(&split(faces), nodes).unwrap()
+            } else {
+                ContactSurface::from_quads(faces, nodes).unwrap()
+            }
+        };
+        let surfaces = vec![surface(&lower, &nodes), surface(&upper, &nodes)];
+        let mut contact = ParticleContact::new(
+            surfaces,
+            ContactSettings {
+                mode: ContactMode::Tied,
+                penalty: 100.0,
+                search_distance: 0.3,
+            },
+        )
+        .unwrap();
+        let x: Vec<f64> = nodes.iter().flatten().copied().collect();
+        contact.pair(&x);
+        let closed = contact.evaluate(&x, false);
+        contact.tie_closed(&closed);
+        // Slide the upper patch (nodes 16..32) by (0.03, -0.02, 0.01).
+        let mut slid = nodes.clone();
+        for p in &mut slid[16..] {
+            p[0] += 0.03;
+            p[1] -= 0.02;
+            p[2] += 0.01;
+        }
+        check_tangent_of(&contact, &slid);
+    }
+}
+
 fn check_tangent(surfaces: Vec<ContactSurface>, nodes: &[[f64; 3]]) {
     let mut contact = ParticleContact::new(
         surfaces,
@@ -105,6 +145,13 @@ fn check_tangent(surfaces: Vec<ContactSurface>, nodes: &[[f64; 3]]) {
     .unwrap();
     let x: Vec<f64> = nodes.iter().flatten().copied().collect();
     contact.pair(&x);
+    check_tangent_of(&contact, nodes);
+}
+
+/// The assembled tangent of the terms carrying force against central
+/// differences of the total contact force at `nodes`.
+fn check_tangent_of(contact: &ParticleContact, nodes: &[[f64; 3]]) {
+    let x: Vec<f64> = nodes.iter().flatten().copied().collect();
     let eval = contact.evaluate(&x, true);
     assert!(eval.terms.iter().filter(|t| t.pressure > 0.0).count() >= 4);
     let n = x.len();
@@ -125,7 +172,7 @@ fn check_tangent(surfaces: Vec<ContactSurface>, nodes: &[[f64; 3]]) {
         let (mut xp, mut xm) = (x.clone(), x.clone());
         xp[j] += h;
         xm[j] -= h;
-        let (fp, fm) = (total_force(&contact, &xp), total_force(&contact, &xm));
+        let (fp, fm) = (total_force(contact, &xp), total_force(contact, &xm));
         for i in 0..n {
             let fd = (fp[i] - fm[i]) / (2.0 * h);
             let an = k[i * n + j];

@@ -382,3 +382,88 @@ impl Constraints {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One curved-surface node touching the piston (z = Lz) of a unit box,
+    /// and one free curved node inside it: their z dofs are unilateral.
+    fn two_nodes() -> Constraints {
+        let nodes = [[0.5, 0.5, 1.0], [0.5, 0.5, 0.5]];
+        let faces: [(&[usize], FaceKind); 1] = [(&[0, 1], FaceKind::Curved)];
+        Constraints::new(&nodes, faces, [1.0; 3], true, false).unwrap()
+    }
+
+    const Z0: usize = 2; // z dof of the node on the piston
+    const Z1: usize = 5; // z dof of the inner node
+
+    #[test]
+    fn contact_closes_on_penetration_and_opens_on_tension() {
+        let mut c = two_nodes();
+        let mut u = vec![0.0; 6];
+        let mut f = vec![0.0; 6];
+        // The node on the piston starts in contact, held on the piston's equation.
+        assert_eq!(c.equation_map()[Z0], c.piston_equation());
+        // Compression (the piston pushes it down: -z on the high plane) keeps it.
+        f[Z0] = -1.0;
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9), 0);
+        // Tension releases it; a tensile force within the tolerance does not.
+        f[Z0] = 1e-7;
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9), 0);
+        f[Z0] = 1e-3;
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9), 1);
+        assert_eq!(c.equation_map()[Z0], Z0);
+        // The inner node moving up through the lowered piston is caught, and
+        // the next solve is told how far it is off the plane.
+        let piston = -0.4;
+        u[Z0] = -0.45; // the released node stays below the piston (z = 0.55)
+        u[Z1] = 0.2; // at z = 0.7 > 0.6
+        f.fill(0.0);
+        assert_eq!(c.update(&u, piston, &f, 1e-6, 1e-9), 1);
+        assert_eq!(c.equation_map()[Z1], c.piston_equation());
+        let offsets = c.offsets(&u, piston);
+        assert!(
+            offsets
+                .iter()
+                .any(|&(d, delta)| d == Z1 && (delta + 0.1).abs() < 1e-12)
+        );
+        // A penetration within the gap tolerance is not a contact.
+        let mut c = two_nodes();
+        let mut u = vec![0.0; 6];
+        u[Z1] = 1e-10; // 1e-10 above the piston lowered to z = 0.5
+        assert_eq!(c.update(&u, -0.5, &f, 1e-6, 1e-9), 0);
+        u[Z1] = 1e-8;
+        assert_eq!(c.update(&u, -0.5, &f, 1e-6, 1e-9), 1);
+    }
+
+    #[test]
+    fn a_dof_that_chatters_stays_in_contact_until_the_next_step() {
+        let mut c = two_nodes();
+        let u = vec![0.0; 6];
+        let mut f = vec![0.0; 6];
+        let mut under = u.clone();
+        under[Z0] = 1e-3; // pushed through the piston while free
+        // Release (tension) and catch (penetration) alternately: each is a
+        // flip, until MAX_FLIPS of them in this step.
+        let mut flips = 0;
+        for _ in 0..10 {
+            let released = c.equation_map()[Z0] == Z0;
+            f[Z0] = 1.0; // tensile on the high plane
+            let changes = if released {
+                c.update(&under, 0.0, &f, 1e-6, 1e-9)
+            } else {
+                c.update(&u, 0.0, &f, 1e-6, 1e-9)
+            };
+            flips += changes;
+        }
+        assert_eq!(flips, usize::from(MAX_FLIPS));
+        // The last flip was a catch: it stays held, tension or not, ...
+        assert_eq!(c.equation_map()[Z0], c.piston_equation());
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9), 0);
+        // ... until the next step lets it change again.
+        c.reset_flips();
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9), 1);
+        assert_eq!(c.equation_map()[Z0], Z0);
+    }
+}

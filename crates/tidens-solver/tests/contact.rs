@@ -98,28 +98,41 @@ fn pair_deforms_mirror_symmetrically(element: ElementKind) {
     // mirror image in the reference configuration stay mirror images.
     let x0 = scene.nodes();
     let lz0 = scene.lengths[2];
+    // The node of the top particle nearest the mirror image of `n`, and
+    // how far from the image it is.
     let image = |n: usize| {
         let p = x0[n];
-        (top.nodes.0..top.nodes.0 + top.nodes.1)
-            .min_by(|&a, &b| {
-                let d = |m: usize| {
-                    let q = x0[m];
-                    (p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] + q[2] - lz0).powi(2)
-                };
-                d(a).total_cmp(&d(b))
-            })
-            .unwrap()
+        let d = |m: usize| {
+            let q = x0[m];
+            ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] + q[2] - lz0).powi(2)).sqrt()
+        };
+        let m = (top.nodes.0..top.nodes.0 + top.nodes.1)
+            .min_by(|&a, &b| d(a).total_cmp(&d(b)))
+            .unwrap();
+        (m, d(m))
     };
     let mut asym: f64 = 0.0;
     for k in 0..bottom.nodes.1 {
         let n = bottom.nodes.0 + k;
-        let (p, q) = (f.points[n], f.points[image(n)]);
+        let (m, off) = image(n);
+        assert!(off < 1e-12 * r, "node {n} has no mirror image");
+        let (p, q) = (f.points[n], f.points[m]);
         asym = asym
             .max((p[0] - q[0]).abs())
             .max((p[1] - q[1]).abs())
             .max((p[2] + q[2] - lz).abs());
     }
-    assert!(asym < 2e-3 * r, "mirror asymmetry {asym:e} mm");
+    // Hexahedra: the two meshes are mirror images element by element, so
+    // the deformation is symmetric to round-off (measured 1.7e-15 R at
+    // level 1). Tetrahedra: the nodes are mirror images but the cut of each
+    // hexahedron into six is not (the mirror image of its diagonal is the
+    // other diagonal), so the discretisations differ by O(h^2) (measured
+    // 1.8e-3 R at level 1).
+    let (asym_tol, flat_tol) = match element {
+        ElementKind::Hex8 => (1e-12 * r, 1e-6 * r),
+        ElementKind::Tet10 => (4e-3 * r, 1e-3 * r),
+    };
+    assert!(asym < asym_tol, "mirror asymmetry {asym:e} mm");
     // Nodes in contact lie on the mid-plane.
     let mid = 0.5 * lz;
     let mut flat: f64 = 0.0;
@@ -129,8 +142,10 @@ fn pair_deforms_mirror_symmetrically(element: ElementKind) {
         pressed += 1;
     }
     assert!(pressed >= 4, "only {pressed} nodes in contact");
+    // Hexahedra: off by the penetration the penalty leaves (measured
+    // 1.4e-7 R); tetrahedra: by their asymmetry (4.8e-4 R).
     assert!(
-        flat < 2e-3 * r,
+        flat < flat_tol,
         "contact surface off the mid-plane by {flat:e} mm"
     );
     // Against the sc cell on the same mesh: the contact replaces its mirror plane.
@@ -220,7 +235,7 @@ fn contact_force_balances(element: ElementKind) {
 }
 
 /// fcc: the four octants are equivalent by symmetry, so their plastic
-/// strain agrees; sc-2: the small particles deform more than the large ones.
+/// strain agrees (to the contact's slave-master asymmetry); sc-2: the small particles deform more than the large ones.
 #[test]
 fn plastic_strain_follows_the_symmetry_and_the_sizes() {
     let mean_eqps = |scene: &Scene, sim: &Simulation| -> Vec<(f64, f64)> {
@@ -247,7 +262,10 @@ fn plastic_strain_follows_the_symmetry_and_the_sizes() {
     let (lo, hi) = e.iter().fold((f64::INFINITY, 0.0_f64), |(a, b), x| {
         (a.min(x.0), b.max(x.0))
     });
-    assert!(hi / lo - 1.0 < 0.03, "fcc mean plastic strains {e:?}");
+    // Not to round-off: each touching pair has a slave and a master side,
+    // and which side is which differs between the octants (measured 2.1e-4
+    // at level 1).
+    assert!(hi / lo - 1.0 < 1e-3, "fcc mean plastic strains {e:?}");
     let (scene, mut sc2) = press(
         &Cell::sc2(0.05, 1.566, 1.0).unwrap(),
         1,
@@ -273,12 +291,13 @@ fn plastic_strain_follows_the_symmetry_and_the_sizes() {
         s > 1.2 * l,
         "sc-2: smallest mean eqps of small particles {s:.4} vs largest of large {l:.4}"
     );
-    // Particles of one size deform alike.
+    // Particles of one size deform alike, to the round-off accumulated over
+    // the steps (measured 4e-12).
     for group in [&large, &small] {
         let (a, b) = group
             .iter()
             .fold((f64::INFINITY, 0.0_f64), |(a, b), x| (a.min(*x), b.max(*x)));
-        assert!(b / a - 1.0 < 0.05, "particles of one size: {group:?}");
+        assert!(b / a - 1.0 < 1e-9, "particles of one size: {group:?}");
     }
 }
 
