@@ -265,9 +265,11 @@ impl Constraints {
     /// are left where they are: [`Constraints::offsets`] says how far they are
     /// off their plane, for the next linear solve to move them onto it), dofs
     /// in contact whose reaction has become tensile by
-    /// more than `force_tol` \[N\] are released. `f_int` is the internal force of
-    /// the body; on a held dof it is the force the plane exerts. Returns the
-    /// number of changes.
+    /// more than `force_tol` \[N\] are released (only with `release`: the
+    /// reactions mean something at an equilibrium of the present set, not
+    /// half-way through Newton). `f_int` is the internal force of the body;
+    /// on a held dof it is the force the plane exerts. Returns the number of
+    /// changes.
     pub fn update(
         &mut self,
         u: &[f64],
@@ -275,12 +277,13 @@ impl Constraints {
         f_int: &[f64],
         force_tol: f64,
         gap_tol: f64,
+        release: bool,
     ) -> usize {
         let mut changes = 0;
         for k in 0..self.unilateral.len() {
             let d = self.unilateral[k];
             match self.contact[d] {
-                Some(_) if self.flips[d] >= MAX_FLIPS => {}
+                Some(_) if !release || self.flips[d] >= MAX_FLIPS => {}
                 Some(high) => {
                     // The plane pushes toward the box interior: -e on the high
                     // plane, +e on the low one. Anything else is tension.
@@ -407,12 +410,12 @@ mod tests {
         assert_eq!(c.equation_map()[Z0], c.piston_equation());
         // Compression (the piston pushes it down: -z on the high plane) keeps it.
         f[Z0] = -1.0;
-        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9), 0);
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9, true), 0);
         // Tension releases it; a tensile force within the tolerance does not.
         f[Z0] = 1e-7;
-        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9), 0);
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9, true), 0);
         f[Z0] = 1e-3;
-        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9), 1);
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9, true), 1);
         assert_eq!(c.equation_map()[Z0], Z0);
         // The inner node moving up through the lowered piston is caught, and
         // the next solve is told how far it is off the plane.
@@ -420,7 +423,7 @@ mod tests {
         u[Z0] = -0.45; // the released node stays below the piston (z = 0.55)
         u[Z1] = 0.2; // at z = 0.7 > 0.6
         f.fill(0.0);
-        assert_eq!(c.update(&u, piston, &f, 1e-6, 1e-9), 1);
+        assert_eq!(c.update(&u, piston, &f, 1e-6, 1e-9, true), 1);
         assert_eq!(c.equation_map()[Z1], c.piston_equation());
         let offsets = c.offsets(&u, piston);
         assert!(
@@ -432,9 +435,9 @@ mod tests {
         let mut c = two_nodes();
         let mut u = vec![0.0; 6];
         u[Z1] = 1e-10; // 1e-10 above the piston lowered to z = 0.5
-        assert_eq!(c.update(&u, -0.5, &f, 1e-6, 1e-9), 0);
+        assert_eq!(c.update(&u, -0.5, &f, 1e-6, 1e-9, true), 0);
         u[Z1] = 1e-8;
-        assert_eq!(c.update(&u, -0.5, &f, 1e-6, 1e-9), 1);
+        assert_eq!(c.update(&u, -0.5, &f, 1e-6, 1e-9, true), 1);
     }
 
     #[test]
@@ -451,19 +454,37 @@ mod tests {
             let released = c.equation_map()[Z0] == Z0;
             f[Z0] = 1.0; // tensile on the high plane
             let changes = if released {
-                c.update(&under, 0.0, &f, 1e-6, 1e-9)
+                c.update(&under, 0.0, &f, 1e-6, 1e-9, true)
             } else {
-                c.update(&u, 0.0, &f, 1e-6, 1e-9)
+                c.update(&u, 0.0, &f, 1e-6, 1e-9, true)
             };
             flips += changes;
         }
         assert_eq!(flips, usize::from(MAX_FLIPS));
         // The last flip was a catch: it stays held, tension or not, ...
         assert_eq!(c.equation_map()[Z0], c.piston_equation());
-        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9), 0);
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9, true), 0);
         // ... until the next step lets it change again.
         c.reset_flips();
-        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9), 1);
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9, true), 1);
+        assert_eq!(c.equation_map()[Z0], Z0);
+    }
+
+    #[test]
+    fn contacts_are_released_only_when_asked_but_always_caught() {
+        let mut c = two_nodes();
+        let mut u = vec![0.0; 6];
+        let mut f = vec![0.0; 6];
+        f[Z0] = 1.0; // tensile on the piston
+        // Away from equilibrium the tension is not trusted: no release.
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9, false), 0);
+        assert_eq!(c.equation_map()[Z0], c.piston_equation());
+        // A penetrating node is caught all the same.
+        u[Z1] = 0.6; // z = 1.1 > 1
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9, false), 1);
+        assert_eq!(c.equation_map()[Z1], c.piston_equation());
+        // At equilibrium the tension releases it.
+        assert_eq!(c.update(&u, 0.0, &f, 1e-6, 1e-9, true), 1);
         assert_eq!(c.equation_map()[Z0], Z0);
     }
 }

@@ -197,11 +197,20 @@ impl Simulation {
         let mut active_set_updates = 0;
         let mut augmentations = 0;
         loop {
-            // Contact: release tensile contacts, catch penetrating nodes.
+            // Contact: catch penetrating nodes at once; release tensile
+            // contacts only where the iterate is in equilibrium for the
+            // present contact set. Away from it the reactions say little: on
+            // stiff materials (E/sigma 1e7, nu 0.499) a node pushed through
+            // the piston by one iteration reads as tensile at the next, is
+            // released, goes through again, and the set chatters until the
+            // step fails (measured: sc at E/sigma = 1e7, 66 failed attempts).
+            let settled =
+                max_abs(&self.residual(&eval.f_int, &self.constraints.equation_map(), force))
+                    <= tol;
             if active_set_updates < MAX_ACTIVE_SET_UPDATES
                 && self
                     .constraints
-                    .update(&u, piston, &eval.f_int, tol, gap_tol)
+                    .update(&u, piston, &eval.f_int, tol, gap_tol, settled)
                     > 0
             {
                 active_set_updates += 1;

@@ -1,0 +1,194 @@
+"""Stiff and extreme cases: does every case run, converge and stay physical,
+and what does it cost against the base case on the same mesh?
+
+    python benches/extremes.py [--cells sc bcc sc2] [--level 3] [--only n stress ...]
+                               [--timeout 600] [--save extremes.json]
+
+Each case changes one thing of the base case (Ti-6Al-4V creep at 1293 K,
+10 MPa, ramp 1 s, to rho = 0.9, default solver settings): the creep exponent
+n (with C scaled so that the creep rate at 10 MPa stays the base's), the
+coefficient C, the stress, E/sigma, nu, the aspect ratio c/a, the final
+density, a long hold. Per case it prints the status (or the refusal, with
+its reason), wall time and its ratio to the base case's, steps, Newton
+iterations, failed attempts, t(0.9), and the physical checks: rho(t)
+monotone, no NaN, particle volume kept to the elastic part (|dV/V| against
+3 sigma / K with K the bulk modulus), the largest penetration against the
+tolerance (1e-4 of the radius). ``--timeout`` stops a case after that many
+seconds (reported as "timeout").
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import tidens_rs as td
+
+BASE_MATERIAL = td.materials.TI64_CREEP_1293K
+BASE_STRESS = 10.0
+BASE_DENSITY = 0.9
+
+
+@dataclass
+class Variant:
+    """One case of the matrix: a group, a label, and what it changes."""
+
+    group: str
+    label: str
+    stress: float = BASE_STRESS
+    material: Callable[[], td.Material] = lambda: BASE_MATERIAL
+    aspect: float = 1.0
+    until_density: float | None = BASE_DENSITY
+    until_time: float | None = None
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+def norton(n: float, c: float | None = None) -> td.Material:
+    """The base material with exponent n; C keeps the base's rate at 10 MPa
+    unless given."""
+    m = BASE_MATERIAL
+    if c is None:
+        c = m.creep_c * BASE_STRESS ** (m.creep_n - n)
+    return td.Material(m.young_mpa, m.poisson, c, n)
+
+
+def variants() -> list[Variant]:
+    m = BASE_MATERIAL
+    out = [Variant("base", "base")]
+    out += [Variant("n", f"n = {n:g}", material=lambda n=n: norton(n)) for n in (1.0, 2.8, 8.0, 15.0, 50.0)]
+    out += [Variant("C", f"C = {c:g}", material=lambda c=c: norton(m.creep_n, c)) for c in (1e-12, 1e-9, 1e-3)]
+    out += [Variant("stress", f"stress = {s:g} MPa", stress=s) for s in (1e-3, 0.1, 1.0, 100.0, 200.0)]
+    out += [
+        Variant("E/sigma", f"E/sigma = {r:g}", material=lambda r=r: m.with_elastic(r * BASE_STRESS, m.poisson))
+        for r in (1e2, 1e3, 1e5, 1e7)
+    ]
+    out += [Variant("nu", f"nu = {nu:g}", material=lambda nu=nu: m.with_elastic(m.young_mpa, nu)) for nu in (0.45, 0.49, 0.499)]
+    out += [Variant("c/a", f"c/a = {k:g}", aspect=k) for k in (0.2, 0.5, 2.0, 5.0)]
+    out += [Variant("density", "to rho = 0.99", until_density=0.99)]
+    out += [Variant("hold", "hold to 1e6 s", until_density=None, until_time=1e6)]
+    return out
+
+
+def cell_of(name: str, aspect: float) -> td.Cell:
+    return td.cells.by_name(name, aspect_ratio=aspect)
+
+
+def run_one(cell_name: str, v: Variant, level: int, timeout: float) -> dict[str, Any]:
+    row: dict[str, Any] = {"cell": cell_name, "group": v.group, "case": v.label}
+    try:
+        material = v.material()
+        case = td.Case(
+            cell=cell_of(cell_name, v.aspect),
+            material=material,
+            stress_mpa=v.stress,
+            solver=td.SolverSettings(mesh_level=level, **v.extra),
+        )
+    except (ValueError, TypeError, td.TidensError) as e:
+        row.update(status="refused", reason=str(e))
+        return row
+    start = time.perf_counter()
+
+    def stop_after(_: dict[str, float]) -> bool:
+        return time.perf_counter() - start < timeout
+
+    try:
+        r = case.run(v.until_density, v.until_time, error_estimate=False, callback=stop_after)
+        status = r.status if r.status != "stopped" else "timeout"
+    except td.ConvergenceError as e:
+        r = e.result
+        status = f"failed ({e.reason})"
+    except (ValueError, td.TidensError) as e:
+        row.update(status="refused", reason=str(e))
+        return row
+    wall = time.perf_counter() - start
+    rho, t = r.rel_density, r.time_s
+    volume = r.curve["particle_volume_mm3"]
+    m = material
+    bulk = m.young_mpa / (3 * (1 - 2 * m.poisson))
+    dv = float(np.max(np.abs(volume / volume[0] - 1)))
+    radius = td.cells.DEFAULT_RADIUS_MM * max(1.0, v.aspect)
+    pen = float(np.max(r.curve["max_penetration_mm"]))
+    finite = all(np.all(np.isfinite(c)) for c in r.curve.values())
+    row.update(
+        status=status,
+        wall_s=wall,
+        steps=r.stats["steps"],
+        newton=r.stats["newton_iterations"],
+        failed_attempts=r.stats["failed_attempts"],
+        final_density=float(rho[-1]),
+        final_time_s=float(t[-1]),
+        t09_s=r.time_to_density(0.9) if rho[-1] >= 0.9 else None,
+        monotone=bool(np.all(np.diff(rho) >= -1e-12)),
+        finite=bool(finite),
+        volume_change=dv,
+        volume_bound=3 * v.stress / bulk,
+        penetration_over_radius=pen / radius,
+    )
+    row["physical"] = bool(
+        row["monotone"] and row["finite"] and dv <= max(3 * v.stress / bulk, 1e-9) and pen <= 1e-4 * radius * 1.01
+    )
+    return row
+
+
+def fmt(x: Any, spec: str = ".3g") -> str:
+    if x is None:
+        return "-"
+    if isinstance(x, bool):
+        return "yes" if x else "NO"
+    if isinstance(x, float):
+        return format(x, spec)
+    return str(x)
+
+
+def report(rows: list[dict[str, Any]]) -> None:
+    by_cell: dict[str, list[dict[str, Any]]] = {}
+    for r in rows:
+        by_cell.setdefault(r["cell"], []).append(r)
+    for cell, rs in by_cell.items():
+        base = next((r for r in rs if r["case"] == "base" and "wall_s" in r), None)
+        print(f"\n{cell}")
+        print("| case | status | wall [s] | / base | steps | Newton | failed attempts | final rho | t(0.9) [s] | monotone | finite | |dV/V| (bound) | pen / R | physical |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+        for r in rs:
+            if r["status"] == "refused":
+                print(f"| {r['case']} | refused: {r['reason']} |" + " |" * 12)
+                continue
+            ratio = r["wall_s"] / base["wall_s"] if base else None
+            print(
+                f"| {r['case']} | {r['status']} | {fmt(r['wall_s'], '.1f')} | {fmt(ratio, '.2f')} | {r['steps']} | {r['newton']} | "
+                f"{r['failed_attempts']} | {fmt(r['final_density'], '.4f')} | {fmt(r['t09_s'])} | {fmt(r['monotone'])} | {fmt(r['finite'])} | "
+                f"{fmt(r['volume_change'], '.2e')} ({fmt(r['volume_bound'], '.1e')}) | {fmt(r['penetration_over_radius'], '.1e')} | {fmt(r['physical'])} |"
+            )
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cells", nargs="+", default=["sc", "bcc", "sc2"], choices=td.cells.CELL_NAMES)
+    ap.add_argument("--level", type=int, default=td.DEFAULT_MESH_LEVEL)
+    ap.add_argument("--only", nargs="+", help="groups to run (base, n, C, stress, E/sigma, nu, c/a, density, hold)")
+    ap.add_argument("--timeout", type=float, default=600.0)
+    ap.add_argument("--save", type=Path)
+    args = ap.parse_args()
+    rows = []
+    for cell in args.cells:
+        for v in variants():
+            if args.only and v.group not in args.only and v.group != "base":
+                continue
+            row = run_one(cell, v, args.level, args.timeout)
+            rows.append(row)
+            print(f"# {cell} {v.label}: {row['status']} {fmt(row.get('wall_s'), '.1f')} s", flush=True)
+            if args.save:
+                args.save.write_text(json.dumps(rows, indent=1, default=lambda o: None))
+    report(rows)
+
+
+if __name__ == "__main__":
+    main()
