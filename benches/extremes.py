@@ -60,17 +60,29 @@ def norton(n: float, c: float | None = None) -> td.Material:
     return td.Material(m.young_mpa, m.poisson, c, n)
 
 
+def _with_n(n: float) -> Callable[[], td.Material]:
+    return lambda: norton(n)
+
+
+def _with_c(c: float) -> Callable[[], td.Material]:
+    return lambda: norton(BASE_MATERIAL.creep_n, c)
+
+
+def _with_elastic(young: float, nu: float) -> Callable[[], td.Material]:
+    return lambda: BASE_MATERIAL.with_elastic(young, nu)
+
+
 def variants() -> list[Variant]:
     m = BASE_MATERIAL
     out = [Variant("base", "base")]
-    out += [Variant("n", f"n = {n:g}", material=lambda n=n: norton(n)) for n in (1.0, 2.8, 8.0, 15.0, 50.0)]
-    out += [Variant("C", f"C = {c:g}", material=lambda c=c: norton(m.creep_n, c)) for c in (1e-12, 1e-9, 1e-3)]
+    out += [Variant("n", f"n = {n:g}", material=_with_n(n)) for n in (1.0, 2.8, 8.0, 15.0, 50.0)]
+    out += [Variant("C", f"C = {c:g}", material=_with_c(c)) for c in (1e-12, 1e-9, 1e-3)]
     out += [Variant("stress", f"stress = {s:g} MPa", stress=s) for s in (1e-3, 0.1, 1.0, 100.0, 200.0)]
     out += [
-        Variant("E/sigma", f"E/sigma = {r:g}", material=lambda r=r: m.with_elastic(r * BASE_STRESS, m.poisson))
+        Variant("E/sigma", f"E/sigma = {r:g}", material=_with_elastic(r * BASE_STRESS, m.poisson))
         for r in (1e2, 1e3, 1e5, 1e7)
     ]
-    out += [Variant("nu", f"nu = {nu:g}", material=lambda nu=nu: m.with_elastic(m.young_mpa, nu)) for nu in (0.45, 0.49, 0.499)]
+    out += [Variant("nu", f"nu = {nu:g}", material=_with_elastic(m.young_mpa, nu)) for nu in (0.45, 0.49, 0.499)]
     out += [Variant("c/a", f"c/a = {k:g}", aspect=k) for k in (0.2, 0.5, 2.0, 5.0)]
     out += [Variant("density", "to rho = 0.99", until_density=0.99)]
     out += [Variant("hold", "hold to 1e6 s", until_density=None, until_time=1e6)]

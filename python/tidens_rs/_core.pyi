@@ -84,6 +84,7 @@ def check_parameters(
     tied_planes: bool = False,
     contact_penalty_factor: float | None = None,
     penetration_tolerance: float | None = None,
+    material: Material | None = None,
 ) -> None:
     """Checks load and solver knobs against their ranges without building a run."""
 

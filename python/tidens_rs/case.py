@@ -180,7 +180,7 @@ class Case:
             "contact": c.choice("contact", self.contact, CONTACT_MODES),
             "tied_planes": c.flag("tied_planes", self.tied_planes),
         }
-        _core.check_parameters(**fixed)
+        _core.check_parameters(**fixed, material=self.material)
         for name, value in fixed.items():
             object.__setattr__(self, name, value)
 

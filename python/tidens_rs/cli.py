@@ -53,6 +53,7 @@ _OPTION_OF = {
     "size_ratio": "--size-ratio",
     "contact": "--contact",
     "out_dir": "--out",
+    "young_mpa/stress": "--E/(--knockdown x --stress)",
 }
 _NAMED = re.compile(
     r"(?<![\w-])(" + "|".join(re.escape(k) for k in sorted(_OPTION_OF, key=len, reverse=True)) + r")(?=(\[\d+\])? = )"

@@ -202,7 +202,8 @@ impl Knobs<'_> {
 /// Checks load and solver knobs against their ranges without building a
 /// run: the keyword arguments of Simulation but the cell and the material,
 /// all optional (a knob not given is not checked; the stop condition only
-/// when given). Raises ValueError naming the first argument out of range.
+/// when given); with `material`, also E over the stress the cell feels.
+/// Raises ValueError naming the first argument out of range.
 #[pyfunction]
 #[pyo3(signature = (
     *,
@@ -227,6 +228,7 @@ impl Knobs<'_> {
     tied_planes = false,
     contact_penalty_factor = None,
     penetration_tolerance = None,
+    material = None,
 ))]
 // The Python keyword arguments: one per solver knob.
 #[allow(clippy::too_many_arguments)]
@@ -252,6 +254,7 @@ pub fn check_parameters(
     tied_planes: bool,
     contact_penalty_factor: Option<f64>,
     penetration_tolerance: Option<f64>,
+    material: Option<PyRef<'_, PyMaterial>>,
 ) -> PyResult<()> {
     // The core wants a stop condition; a placeholder stands in when none is
     // given, so that only the knobs given are judged.
@@ -259,7 +262,7 @@ pub fn check_parameters(
         (None, None) => Some(1.0),
         (_, t) => t,
     };
-    Knobs {
+    let (settings, _, _) = Knobs {
         stress_mpa,
         knockdown,
         ramp_time_s,
@@ -282,8 +285,13 @@ pub fn check_parameters(
         contact_penalty_factor,
         penetration_tolerance,
     }
-    .checked()
-    .map(|_| ())
+    .checked()?;
+    if let Some(m) = material {
+        settings
+            .validate_for(&m.inner)
+            .map_err(|e| solver_error(e, Phase::Setup))?;
+    }
+    Ok(())
 }
 
 /// What readers on other threads see: refreshed after every step.

@@ -95,6 +95,9 @@ pub struct Settings {
     pub contact: ContactOptions,
 }
 
+/// The allowed range of E / (f sigma), see [`Settings::validate_for`].
+pub const STIFFNESS_RATIO_RANGE: (f64, f64) = (1e2, 1e9);
+
 impl Settings {
     /// Settings with defaults for a load history.
     pub fn new(load: LoadHistory) -> Self {
@@ -112,6 +115,26 @@ impl Settings {
             newton: NewtonSettings::default(),
             contact: ContactOptions::default(),
         }
+    }
+
+    /// Checks that `material` is stiff enough, and not too stiff, for the
+    /// load: E over the stress the cell feels (f sigma) in
+    /// [`STIFFNESS_RATIO_RANGE`]. Below it the elastic strains reach a
+    /// per cent and more, and the curve measures an elastic collapse of the
+    /// packing rather than its creep; above it the stress is so small next
+    /// to E that densification would take longer than any process (and the
+    /// elastic and creep time scales are too far apart for the steps).
+    pub fn validate_for(&self, material: &tidens_material::Material) -> Result<(), SolverError> {
+        let ratio = material.young / (self.load.stress * self.load.knockdown);
+        let (lo, hi) = STIFFNESS_RATIO_RANGE;
+        require(
+            "young_mpa/stress",
+            ratio,
+            (lo..=hi).contains(&ratio),
+            "in [1e2, 1e9] (E over the stress the cell feels, f sigma): below, the \
+             elastic strains pass 1 % and the curve is an elastic collapse, not creep; \
+             above, the stress is too small next to E for densification to matter",
+        )
     }
 
     /// Checks every value against its allowed range.

@@ -122,6 +122,7 @@ impl Simulation {
     /// Sets up a simulation of `scene` made of `material`.
     pub fn new(scene: &Scene, material: Material, settings: Settings) -> Result<Self, SolverError> {
         settings.validate()?;
+        settings.validate_for(&material)?;
         let material = Material::new(
             material.young,
             material.poisson,
