@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 import meshio
+import numpy as np
 import pytest
 
 import tidens_rs as td
@@ -117,3 +118,45 @@ def test_the_command_line_reports_a_failed_write_in_one_line(
     assert main(["run", "--stress", "10", "--until-density", "0.58", "--mesh-level", "1", "--quiet", "--no-plot",
                  "--overwrite", "--out", str(out)]) == 0
     assert (out / "fields_final.vtu").exists()
+
+
+def test_a_run_stopped_in_the_middle_resumes_to_the_same_curve_bit_for_bit(tmp_path: Path) -> None:
+    case = td.Case(
+        cell=td.cells.bcc(),
+        material=td.materials.TI64_CREEP_1293K,
+        stress_mpa=15.0,
+        solver=td.SolverSettings(mesh_level=1, tolerance=0.02, checkpoint_every=10),
+    )
+    through = case.run(until_density=0.8, out_dir=tmp_path / "through", snapshot_densities=[0.72, 0.75])
+    steps = through.stats["steps"]
+    assert steps > 30
+
+    def ctrl_c(point: dict[str, float]) -> None:
+        if point["step"] >= steps // 2 + 3:  # between two checkpoints
+            raise KeyboardInterrupt
+
+    out = tmp_path / "stopped"
+    with pytest.raises(KeyboardInterrupt):
+        case.run(until_density=0.8, out_dir=out, snapshot_densities=[0.72, 0.75], callback=ctrl_c)
+    assert json.loads((out / "summary.json").read_text())["status"] == "interrupted"
+    resumed = td.resume(out)
+    for column, values in through.curve.items():
+        assert np.array_equal(values, resumed.curve[column]), column
+    assert (out / "curve.csv").read_text() == (tmp_path / "through" / "curve.csv").read_text()
+    a = json.loads((tmp_path / "through" / "summary.json").read_text())
+    b = json.loads((out / "summary.json").read_text())
+    assert b["status"] == "reached_density" and b["times_to_density_s"] == a["times_to_density_s"]
+    assert b["error_estimate"]["relative"] == a["error_estimate"]["relative"]
+    # The snapshots of both parts are in the collection, once each.
+    names = [name for _, name in io.read_pvd(out / "fields.pvd")]
+    assert names == [name for _, name in io.read_pvd(tmp_path / "through" / "fields.pvd")]
+
+
+def test_resume_refuses_a_folder_without_a_run_and_case_options(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(FileNotFoundError, match="no run to resume"):
+        td.resume(tmp_path)
+    code = main(["run", "--resume", str(tmp_path), "--quiet"])
+    assert code == 1 and "no run to resume" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as e:
+        main(["run", "--resume", str(tmp_path), "--stress", "10"])
+    assert e.value.code == 2 and "leave out --stress" in capsys.readouterr().err

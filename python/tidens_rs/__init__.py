@@ -20,7 +20,7 @@ from ._core import (
     UnsupportedError,
     __version__,
 )
-from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings
+from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings, resume
 from .continuum import ContinuumModel
 from .io import OutputError
 from .result import Result
@@ -46,4 +46,5 @@ __all__ = [
     "cells",
     "continuum",
     "materials",
+    "resume",
 ]

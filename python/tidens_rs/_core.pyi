@@ -84,6 +84,7 @@ def check_parameters(
     tied_planes: bool = False,
     contact_penalty_factor: float | None = None,
     penetration_tolerance: float | None = None,
+    checkpoint_every: int | None = None,
     material: Material | None = None,
 ) -> None:
     """Checks load and solver knobs against their ranges without building a run."""
@@ -166,7 +167,11 @@ class Simulation:
         tied_planes: bool = False,
         contact_penalty_factor: float | None = None,
         penetration_tolerance: float | None = None,
+        checkpoint_every: int | None = None,
+        resume_from: bytes | None = None,
     ) -> Simulation: ...
+    def checkpoint(self) -> bytes:
+        """The run's state as bytes (give them back as resume_from)."""
     def advance(self) -> dict[str, float]:
         """One converged step (GIL released); returns its curve point."""
     def run(self, callback: Callable[[dict[str, float]], bool | None] | None = None) -> str:

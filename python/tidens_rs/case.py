@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import sys
@@ -11,7 +12,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from . import _checks, _core, io
+from . import _checks, _core, cells, io
 from ._core import CONTACT_MODES, ELEMENTS, SOLVER_DEFAULTS, Cell, ConvergenceError, Material
 from .estimate import COMPANION_TOLERANCE_FACTOR, ErrorEstimate, estimate_error
 from .result import MARK_DENSITIES, Result
@@ -19,6 +20,12 @@ from .snapshot import Snapshot
 
 # Curve columns the error estimate reads.
 ESTIMATE_COLUMNS = ("time_s", "rel_density", "time_error_s")
+
+# What a run with an output folder writes there to be resumed.
+RUN_FILE = "run.json"
+CHECKPOINT_FILE = "checkpoint.bin"
+# Steps between checkpoints when SolverSettings.checkpoint_every is 0.
+CHECKPOINT_INTERVAL = 50
 
 # The largest time tolerance the core accepts.
 MAX_TOLERANCE = 0.5
@@ -86,6 +93,19 @@ class SolverSettings:
         a fraction of the largest particle radius, in [1e-8, 1e-2]; the
         solver aims at half of it. The curve reports the penetration reached
         (``max_penetration_mm``).
+    checkpoint_every
+        0 (the default), or the steps between checkpoints that resume bit
+        for bit: at those steps the solver drops what it keeps only for
+        speed (the factor of the tangent, the pattern grown for particle
+        contacts), so that :func:`resume` from there goes on exactly like an
+        uninterrupted run. Checkpoints (``checkpoint.bin`` in the output
+        folder) are written every ``checkpoint_every`` steps, or every
+        ``CHECKPOINT_INTERVAL`` steps when it is 0, and at any stop; resumed
+        from one that is not at such a step, a run agrees with the
+        uninterrupted one within the Newton tolerance. Not the default:
+        dropping the factor perturbs a run at round-off level, and the step
+        sequence can react to that (bcc at level 2 to rho = 0.85: 508 steps
+        with 50, 261 without, the same curve within its tolerance).
 
     The contact *model* (frictionless or tied particle contact, tied die
     walls) is physics, not a solver knob: it is :attr:`Case.contact` and
@@ -105,6 +125,7 @@ class SolverSettings:
     newton_residual_tolerance: float = SOLVER_DEFAULTS["newton_residual_tolerance"]
     contact_penalty_factor: float = SOLVER_DEFAULTS["contact_penalty_factor"]
     penetration_tolerance: float = SOLVER_DEFAULTS["penetration_tolerance"]
+    checkpoint_every: int = SOLVER_DEFAULTS["checkpoint_every"]
 
     def __post_init__(self) -> None:
         # Checked when written, not when run: the kinds here, the ranges by
@@ -124,6 +145,7 @@ class SolverSettings:
             "newton_residual_tolerance": c.real("newton_residual_tolerance", self.newton_residual_tolerance),
             "contact_penalty_factor": c.real("contact_penalty_factor", self.contact_penalty_factor),
             "penetration_tolerance": c.real("penetration_tolerance", self.penetration_tolerance),
+            "checkpoint_every": c.integer("checkpoint_every", self.checkpoint_every),
         }
         _core.check_parameters(**fixed)
         for name, value in fixed.items():
@@ -189,8 +211,10 @@ class Case:
         until_density: float | None = None,
         until_time_s: float | None = None,
         time_targets_s: Sequence[float] = (),
+        resume_from: bytes | None = None,
     ) -> _core.Simulation:
-        """The native simulation object of this case (advance it yourself)."""
+        """The native simulation object of this case (advance it yourself);
+        with ``resume_from`` (a checkpoint's bytes), it goes on from there."""
         s = self.solver
         return _core.Simulation(
             self.cell,
@@ -216,6 +240,40 @@ class Case:
             tied_planes=self.tied_planes,
             contact_penalty_factor=s.contact_penalty_factor,
             penetration_tolerance=s.penetration_tolerance,
+            checkpoint_every=s.checkpoint_every,
+            resume_from=resume_from,
+        )
+
+    def as_dict(self) -> dict[str, Any]:
+        """The case as plain data (``Case.from_dict`` rebuilds it)."""
+        m = self.material
+        return {
+            "cell": cells.to_dict(self.cell),
+            "material": {"young_mpa": m.young_mpa, "poisson": m.poisson, "creep_c": m.creep_c, "creep_n": m.creep_n},
+            "stress_mpa": self.stress_mpa,
+            "knockdown": self.knockdown,
+            "ramp_time_s": self.ramp_time_s,
+            "solver": self.solver.as_dict(),
+            "contact": self.contact,
+            "tied_planes": self.tied_planes,
+        }
+
+    @staticmethod
+    def from_dict(data: dict[str, Any]) -> Case:
+        """The case of :meth:`as_dict`."""
+        m = data["material"]
+        solver = dict(data["solver"])
+        if solver.get("dt_max_s") is None:
+            solver["dt_max_s"] = math.inf  # JSON has no infinity
+        return Case(
+            cell=cells.from_dict(data["cell"]),
+            material=Material(m["young_mpa"], m["poisson"], m["creep_c"], m["creep_n"]),
+            stress_mpa=data["stress_mpa"],
+            knockdown=data["knockdown"],
+            ramp_time_s=data["ramp_time_s"],
+            solver=SolverSettings(**solver),
+            contact=data["contact"],
+            tied_planes=data["tied_planes"],
         )
 
     def run(
@@ -302,6 +360,25 @@ class Case:
                 callback=callback,
                 clear_outputs=clear,
             )
+        # Built first: bad input (an overlapping cell) fails before any file.
+        sim = self.simulation(until_density, until_time_s, snapshot_times_s)
+        if out is not None:
+            if clear:
+                io.clear_outputs(out)
+            io.write_json(
+                out / RUN_FILE,
+                {
+                    "tidens_version": _core.__version__,
+                    "case": self.as_dict(),
+                    "run": {
+                        "until_density": until_density,
+                        "until_time_s": until_time_s,
+                        "snapshot_densities": list(snapshot_densities),
+                        "snapshot_times_s": list(snapshot_times_s),
+                        "error_estimate": error_estimate,
+                    },
+                },
+            )
         result, error = self._press(
             until_density,
             until_time_s,
@@ -310,7 +387,8 @@ class Case:
             snapshot_times_s=snapshot_times_s,
             progress=progress,
             callback=callback,
-            clear_outputs=clear,
+            checkpoint_path=out / CHECKPOINT_FILE if out is not None else None,
+            sim=sim,
         )
         why: str | None = None
         if error is not None or result.status not in ("reached_density", "reached_time"):
@@ -420,17 +498,23 @@ class Case:
         callback: ProgressCallback | None = None,
         fields: bool = True,
         clear_outputs: bool = False,
+        checkpoint_path: Path | None = None,
+        resume_from: bytes | None = None,
+        sim: _core.Simulation | None = None,
     ) -> tuple[Result, BaseException | None]:
         """One run of the solver, streaming its curve to ``curve_path``: the
         result and the exception that ended it (None if none did). With
         ``clear_outputs``, an earlier run's outputs beside ``curve_path`` are
         deleted once the simulation is set up (bad input leaves them)."""
-        sim = self.simulation(until_density, until_time_s, snapshot_times_s)
+        if sim is None:
+            sim = self.simulation(until_density, until_time_s, snapshot_times_s, resume_from)
         if clear_outputs and curve_path is not None:
             io.clear_outputs(curve_path.parent)
+        every = self.solver.checkpoint_every or CHECKPOINT_INTERVAL
         writer = io.CurveWriter(curve_path) if curve_path is not None else None
-        pending_rho = sorted(r for r in snapshot_densities)
-        pending_t = sorted(t for t in snapshot_times_s)
+        # A resumed run has passed some of them already.
+        pending_rho = sorted(r for r in snapshot_densities if r > sim.rel_density)
+        pending_t = sorted(t for t in snapshot_times_s if t > sim.time_s * (1 + 1e-9))
         snapshots: list[Snapshot] = []
         bar = _progress_bar(sim.rel_density, until_density, until_time_s) if progress else None
         status = "failed"
@@ -439,11 +523,16 @@ class Case:
         start = time.perf_counter()
         try:
             if writer is not None:
-                writer.write({k: v[0] for k, v in sim.curve().items()})
+                # The initial point, or the whole curve of a resumed run.
+                restored = sim.curve()
+                for k in range(len(restored["time_s"])):
+                    writer.write({c: v[k] for c, v in restored.items()})
             while sim.status == "running":
                 p = sim.advance()
                 if writer is not None:
                     writer.write(p)
+                if checkpoint_path is not None and every > 0 and int(p["step"]) % every == 0:
+                    io.atomic_write(checkpoint_path, lambda tmp: tmp.write_bytes(sim.checkpoint()))
                 while pending_rho and p["rel_density"] >= pending_rho[0]:
                     snapshots.append(_snapshot(sim, f"rho{pending_rho.pop(0):.3f}", p))
                 while pending_t and p["time_s"] >= pending_t[0] * (1 - 1e-9):
@@ -463,6 +552,14 @@ class Case:
         curve = sim.curve()
         if writer is not None:
             error = _complete_curve(writer, curve, error)
+        if checkpoint_path is not None and self.solver.checkpoint_every == 0:
+            # Whatever stopped the run, it can go on from here. (With
+            # checkpoint_every, the last checkpoint at a multiple of it stays:
+            # a resume from there is exact, recomputing the steps since.)
+            try:
+                io.atomic_write(checkpoint_path, lambda tmp: tmp.write_bytes(sim.checkpoint()))
+            except io.OutputError as e:
+                error = error or e
         last = {k: v[-1] for k, v in curve.items()}
         if fields:
             snapshots.append(_snapshot(sim, "final", last))
@@ -523,6 +620,59 @@ def _out_dir(out_dir: Any) -> Path | None:
     if str(out_dir).strip() == "":
         raise ValueError("out_dir = '': must name a folder (use '.' for the current one)")
     return Path(out_dir)
+
+
+def resume(
+    out_dir: str | Path,
+    *,
+    progress: bool = False,
+    callback: ProgressCallback | None = None,
+) -> Result:
+    """Goes on with the run whose outputs are in ``out_dir``, from its last
+    checkpoint (``checkpoint.bin``, written every
+    ``SolverSettings.checkpoint_every`` steps and at any stop: Ctrl-C, a
+    failure, the step limit, the end), with the case and the run's
+    arguments it recorded (``run.json``). The curve, the summary and the
+    fields are those the uninterrupted run would have written: to the bit
+    when the checkpoint was taken at a multiple of
+    ``SolverSettings.checkpoint_every`` steps, within the Newton tolerance
+    otherwise. Raises FileNotFoundError when the folder
+    holds no run to resume, ValueError for a checkpoint of another case or
+    version."""
+    out = _out_dir(out_dir)
+    if out is None:
+        raise TypeError("out_dir = None: give the folder of the run to resume")
+    run_file, checkpoint = out / RUN_FILE, out / CHECKPOINT_FILE
+    missing = [p.name for p in (run_file, checkpoint) if not p.exists()]
+    if missing:
+        raise FileNotFoundError(
+            f"{out}: no run to resume ({' and '.join(missing)} missing): a run writes them when it has an output folder"
+        )
+    data = json.loads(run_file.read_text())
+    case = Case.from_dict(data["case"])
+    args = data["run"]
+    until_density, until_time_s = args["until_density"], args["until_time_s"]
+    earlier = [(t, name) for t, name in io.read_pvd(out / "fields.pvd") if name != "fields_final.vtu"]
+    sim = case.simulation(until_density, until_time_s, args["snapshot_times_s"], resume_from=checkpoint.read_bytes())
+    result, error = case._press(
+        until_density,
+        until_time_s,
+        curve_path=out / "curve.csv",
+        snapshot_densities=args["snapshot_densities"],
+        snapshot_times_s=args["snapshot_times_s"],
+        progress=progress,
+        callback=callback,
+        checkpoint_path=checkpoint,
+        sim=sim,
+    )
+    result.earlier_snapshots = earlier
+    why: str | None = None
+    if error is not None or result.status not in ("reached_density", "reached_time"):
+        why = f"the run ended with status {result.status}"
+    elif not args["error_estimate"]:
+        why = "not asked for (error_estimate=False)"
+    result.error_estimate = case._estimate(result, until_density, until_time_s, out, progress, why)
+    return _finish(result, error, out)
 
 
 def _complete_curve(writer: io.CurveWriter, curve: dict[str, Any], error: BaseException | None) -> BaseException | None:

@@ -20,7 +20,7 @@ from typing import NoReturn
 
 from . import cells, materials
 from ._core import CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, TidensError, UnsupportedError, __version__
-from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings
+from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings, resume
 from .result import MARK_DENSITIES, Result
 
 # The solver defaults, as the Python API has them (the core's), and the case's.
@@ -53,6 +53,7 @@ _OPTION_OF = {
     "size_ratio": "--size-ratio",
     "contact": "--contact",
     "out_dir": "--out",
+    "checkpoint_every": "--checkpoint-every",
     "young_mpa/stress": "--E/(--knockdown x --stress)",
 }
 _NAMED = re.compile(
@@ -118,7 +119,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--E", dest="young", type=float, help=f"Young's modulus [MPa] (default {materials.DEFAULT_YOUNG_MPA:g})")
     g.add_argument("--nu", dest="poisson", type=float, help=f"Poisson's ratio (default {materials.DEFAULT_POISSON:g})")
     g = p.add_argument_group("load")
-    g.add_argument("--stress", type=float, required=True, help="applied piston stress sigma [MPa]")
+    g.add_argument("--stress", type=float, help="applied piston stress sigma [MPa] (required but with --resume)")
     g.add_argument("--knockdown", type=float, default=_CASE_DEFAULTS["knockdown"], help=f"die-wall knock-down factor f, the cell feels f*sigma (default {_CASE_DEFAULTS['knockdown']:g})")
     g.add_argument("--ramp-time", type=float, default=_CASE_DEFAULTS["ramp_time_s"], help=f"linear ramp of the stress [s] (default {_CASE_DEFAULTS['ramp_time_s']:g})")
     g = p.add_argument_group("stop")
@@ -134,7 +135,9 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--no-error-estimate", dest="error_estimate", action="store_false", help="skip the coarse companion run (one mesh level down at twice the tolerance, a fifth to a third of the cost) that gives the error estimate")
     g.add_argument("--max-steps", type=int, default=_DEFAULTS.max_steps, help=f"step limit (default {_DEFAULTS.max_steps})")
     g = p.add_argument_group("output")
-    g.add_argument("--out", type=_folder, required=True, help="output folder, new or empty (see --overwrite)")
+    g.add_argument("--out", type=_folder, help="output folder, new or empty (see --overwrite); required but with --resume")
+    g.add_argument("--resume", type=_folder, metavar="DIR", help="go on with the run in DIR from its last checkpoint (written every --checkpoint-every steps and at any stop), with the case it recorded: no other case option")
+    g.add_argument("--checkpoint-every", type=int, default=_DEFAULTS.checkpoint_every, help="steps between checkpoints from which --resume goes on bit for bit (the solver drops its cached factor there); default 0: checkpoints every 50 steps and at any stop, resumed within the Newton tolerance")
     g.add_argument("--overwrite", action="store_true", help="first delete the outputs of an earlier run in --out (curve, summary, fields, plot; nothing else)")
     g.add_argument("--vtu-densities", type=_float_list, help="comma-separated densities for VTU snapshots (default those of 0.6,0.7,0.8,0.9 above the cell's rho0)")
     g.add_argument("--vtu-times", type=_float_list, default=[], help="comma-separated times [s] for VTU snapshots")
@@ -226,7 +229,40 @@ def _import_matplotlib() -> None:
         pass  # reported where the plot is made
 
 
+# Options that describe the case, which --resume takes from the run's folder.
+_CASE_OPTIONS = (
+    "cell", "cell_file", "aspect_ratio", "radius", "size_ratio", "material", "creep_c", "creep_n", "young",
+    "poisson", "stress", "until_density", "until_time", "accuracy", "mesh_level", "tolerance", "out",
+    "vtu_densities",
+)
+
+
+def _resume(args: argparse.Namespace) -> int:
+    given = [name for name in _CASE_OPTIONS if getattr(args, name) is not None]
+    if given:
+        option = "--" + given[0].replace("_", "-")
+        raise ValueError(f"--resume takes the case from DIR/run.json: leave out {option}")
+    out: Path = args.resume
+    if not args.no_plot:
+        threading.Thread(target=_import_matplotlib, daemon=True).start()
+    try:
+        result = resume(out, progress=not args.quiet)
+    except ConvergenceError as e:
+        print(f"tidens: solver failure: {e} (partial results in {out})", file=sys.stderr)
+        return 3
+    if not args.no_plot:
+        result.plot(out / "density.png")
+    _report(result)
+    print(f"resumed {out}: wrote {out / 'curve.csv'}, {out / 'summary.json'}")
+    return 0
+
+
 def _run(args: argparse.Namespace) -> int:
+    if args.resume is not None:
+        return _resume(args)
+    for option, value in (("--stress", args.stress), ("--out", args.out)):
+        if value is None:
+            raise ValueError(f"{option} is required (unless --resume DIR)")
     if args.until_density is None and args.until_time is None:
         raise ValueError("give --until-density, --until-time or both")
     if args.accuracy is not None:
@@ -251,6 +287,7 @@ def _run(args: argparse.Namespace) -> int:
             exact_volume=args.exact_volume,
             element=args.element,
             max_steps=args.max_steps,
+            checkpoint_every=args.checkpoint_every,
         ),
     )
     # The default snapshot densities start at 0.6, below rho0 of the denser packings.

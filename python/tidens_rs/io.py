@@ -46,8 +46,14 @@ OUTPUT_PATTERNS = (
     "fields_*.vtu",
     "fields.pvd",
     "density.png",
+    "run.json",
+    "checkpoint.bin",
     "*.part",
 )
+
+
+# The columns that count things (written as integers).
+COUNT_COLUMNS = frozenset(("step", "newton_iterations", "newton_total", "contacts", "particle_contacts"))
 
 
 class OutputError(OSError):
@@ -134,7 +140,7 @@ class CurveWriter:
 
     def write(self, point: dict[str, float]) -> None:
         try:
-            self._csv.writerow([_format(point[k]) for k in CURVE_COLUMNS])
+            self._csv.writerow([_format(point[k], k in COUNT_COLUMNS) for k in CURVE_COLUMNS])
             self._file.flush()
         except OSError as e:
             raise output_error(self.path, e) from e
@@ -153,8 +159,10 @@ class CurveWriter:
         self.close()
 
 
-def _format(value: float) -> str:
-    if isinstance(value, (int, np.integer)):
+def _format(value: float, count: bool) -> str:
+    # Counts are integers whether they come as ints (a step's point) or as
+    # floats (a column of the curve's arrays).
+    if count or isinstance(value, (int, np.integer)):
         return str(int(value))
     return repr(float(value))
 
@@ -190,6 +198,23 @@ def write_summary(path: Path, summary: dict[str, Any]) -> None:
     atomic_write(path, lambda tmp: tmp.write_text(text))
 
 
+def write_json(path: Path, data: dict[str, Any]) -> None:
+    """``data`` as indented JSON, written atomically."""
+    text = json.dumps(_json_safe(data), indent=2) + "\n"
+    atomic_write(path, lambda tmp: tmp.write_text(text))
+
+
+def read_pvd(path: Path) -> list[tuple[float, str]]:
+    """The (time, file name) entries of a ParaView collection written by
+    :func:`write_pvd`; none if there is no such file."""
+    if not path.exists():
+        return []
+    import xml.etree.ElementTree as ET
+
+    root = ET.parse(path).getroot()
+    return [(float(d.attrib["timestep"]), d.attrib["file"]) for d in root.iter("DataSet")]
+
+
 def write_vtu(path: Path, snapshot: Snapshot) -> Path:
     """Writes one snapshot: hexahedra in the current configuration with
     displacement, contact force (of the rigid planes) and particle-particle
@@ -215,9 +240,9 @@ def write_vtu(path: Path, snapshot: Snapshot) -> Path:
 
 
 def write_pvd(path: Path, entries: list[tuple[float, Path]]) -> Path:
-    """A ParaView collection listing VTU files with their times [s]."""
+    """A ParaView collection listing VTU files with their times [s], in time order."""
     rows = "\n".join(
-        f'    <DataSet timestep="{t!r}" part="0" file="{p.name}"/>' for t, p in entries
+        f'    <DataSet timestep="{t!r}" part="0" file="{p.name}"/>' for t, p in sorted(entries, key=lambda e: e[0])
     )
     text = (
         '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'

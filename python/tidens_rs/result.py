@@ -78,6 +78,8 @@ class Result:
     message: str | None = None
     error_estimate: ErrorEstimate | None = None
     accuracy_search: dict[str, Any] | None = None
+    # Snapshots an interrupted run wrote before this resumed one: (time, file).
+    earlier_snapshots: list[tuple[float, str]] = field(default_factory=list)
 
     @property
     def time_s(self) -> np.ndarray:
@@ -208,8 +210,10 @@ class Result:
         """Writes every snapshot as ``fields_<label>.vtu`` plus ``fields.pvd``."""
         d = Path(out_dir)
         entries = [(s.time_s, io.write_vtu(d / f"fields_{s.label}.vtu", s)) for s in self.snapshots]
-        if entries:
-            io.write_pvd(d / "fields.pvd", entries)
+        written = {p.name for _, p in entries}
+        earlier = [(t, d / name) for t, name in self.earlier_snapshots if name not in written]
+        if entries or earlier:
+            io.write_pvd(d / "fields.pvd", earlier + entries)
         return [p for _, p in entries]
 
     def plot(self, path: str | Path | None = None) -> Figure:

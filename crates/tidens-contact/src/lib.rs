@@ -73,7 +73,7 @@ pub struct ContactSettings {
 }
 
 /// One slave node's link to a master facet, with its contribution.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ContactTerm {
     /// Body dofs: the slave node's three, then the facet nodes' twelve.
     pub dofs: [usize; TERM_DOFS],
@@ -107,6 +107,13 @@ struct NodeState {
     tie_lambda: [f64; 3],
 }
 
+/// The state of a [`ParticleContact`] that a run carries from step to step.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ContactCheckpoint {
+    state: Vec<Vec<NodeState>>,
+    pairing: Vec<Vec<Option<(usize, usize)>>>,
+}
+
 /// Contact between the surfaces of a scene's particles.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ParticleContact {
@@ -121,7 +128,7 @@ pub struct ParticleContact {
 }
 
 /// The contact contributions at one configuration.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct ContactEvaluation {
     pub terms: Vec<ContactTerm>,
 }
@@ -612,6 +619,36 @@ impl ParticleContact {
     }
 
     /// Copy of the multiplier state, to redo a step from.
+    /// Everything that carries over from one step to the next (the
+    /// multipliers and ties, and each node's master facet), for a
+    /// checkpoint.
+    pub fn checkpoint(&self) -> ContactCheckpoint {
+        ContactCheckpoint {
+            state: self.state.clone(),
+            pairing: self.pairing.clone(),
+        }
+    }
+
+    /// Takes the state of a checkpoint of the same surfaces.
+    pub fn restore_checkpoint(&mut self, c: &ContactCheckpoint) -> Result<(), ContactError> {
+        let fits = |n: &[usize]| {
+            n.len() == self.surfaces.len()
+                && n.iter()
+                    .zip(&self.surfaces)
+                    .all(|(k, s)| *k == s.nodes.len())
+        };
+        let state: Vec<usize> = c.state.iter().map(Vec::len).collect();
+        let pairing: Vec<usize> = c.pairing.iter().map(Vec::len).collect();
+        if !fits(&state) || !fits(&pairing) {
+            return Err(ContactError::Surface(
+                "a checkpoint of other contact surfaces".into(),
+            ));
+        }
+        self.state = c.state.clone();
+        self.pairing = c.pairing.clone();
+        Ok(())
+    }
+
     pub fn state_snapshot(&self) -> StateSnapshot {
         self.state
             .iter()

@@ -94,7 +94,7 @@ pub struct BodyEvaluation {
 }
 
 /// Element-wise fields for output.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ElementFields {
     /// von Mises (Cauchy) stress \[MPa\].
     pub von_mises: Vec<f64>,
@@ -337,6 +337,20 @@ impl Body {
     }
 
     /// Makes the states of `eval` the converged state.
+    /// Replaces the material states (a checkpoint's), one per material
+    /// point in element order; fails when their number is not the body's.
+    pub fn restore_states(&mut self, states: &[PointState]) -> Result<(), FemError> {
+        if states.len() != self.states.len() {
+            return Err(FemError::Mesh(format!(
+                "{} material states for a body of {} points",
+                states.len(),
+                self.states.len()
+            )));
+        }
+        self.states.copy_from_slice(states);
+        Ok(())
+    }
+
     pub fn commit(&mut self, eval: &BodyEvaluation) {
         self.states.copy_from_slice(&eval.states);
     }

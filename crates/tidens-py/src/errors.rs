@@ -126,7 +126,9 @@ pub(crate) fn solver_error(err: SolverError, phase: Phase) -> PyErr {
         SolverError::Material(e) => material_error(e, phase),
         SolverError::Mesh(MeshError::Level(level)) => mesh_level_error(level),
         SolverError::Mesh(e) => PyValueError::new_err(e.to_string()),
-        SolverError::NoLoadPath { .. } => PyValueError::new_err(err.to_string()),
+        SolverError::NoLoadPath { .. } | SolverError::Checkpoint(_) => {
+            PyValueError::new_err(err.to_string())
+        }
         SolverError::Unsupported(_) => UnsupportedError::new_err(err.to_string()),
         SolverError::Fem(_) => match phase {
             Phase::Setup => PyValueError::new_err(err.to_string()),

@@ -19,8 +19,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 use tidens_solver::{
-    ContactMode, ContactOptions, CurvePoint, ElementKind, LoadHistory, MeshOptions, NewtonSettings,
-    RunStats, Scene, Settings, Simulation, Status,
+    Checkpoint, ContactMode, ContactOptions, CurvePoint, ElementKind, LoadHistory, MeshOptions,
+    NewtonSettings, RunStats, Scene, Settings, Simulation, Status,
 };
 
 /// The Python names of the contact modes, in the order of `CONTACT_MODES`.
@@ -99,6 +99,7 @@ pub(crate) fn solver_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("newton_residual_tolerance", s.newton.residual_tolerance)?;
     d.set_item("contact_penalty_factor", s.contact.penalty_factor)?;
     d.set_item("penetration_tolerance", s.contact.penetration_tolerance)?;
+    d.set_item("checkpoint_every", s.checkpoint_every)?;
     Ok(d)
 }
 
@@ -126,6 +127,7 @@ struct Knobs<'a> {
     tied_planes: bool,
     contact_penalty_factor: Option<f64>,
     penetration_tolerance: Option<f64>,
+    checkpoint_every: Option<i64>,
 }
 
 impl Knobs<'_> {
@@ -159,6 +161,10 @@ impl Knobs<'_> {
             max_steps: match self.max_steps {
                 Some(m) => count("max_steps", m, ">= 1")?,
                 None => defaults.max_steps,
+            },
+            checkpoint_every: match self.checkpoint_every {
+                Some(m) => count("checkpoint_every", m, ">= 0 (0: never)")?,
+                None => defaults.checkpoint_every,
             },
             time_targets: self.time_targets_s,
             newton: NewtonSettings {
@@ -228,6 +234,7 @@ impl Knobs<'_> {
     tied_planes = false,
     contact_penalty_factor = None,
     penetration_tolerance = None,
+    checkpoint_every = None,
     material = None,
 ))]
 // The Python keyword arguments: one per solver knob.
@@ -254,6 +261,7 @@ pub fn check_parameters(
     tied_planes: bool,
     contact_penalty_factor: Option<f64>,
     penetration_tolerance: Option<f64>,
+    checkpoint_every: Option<i64>,
     material: Option<PyRef<'_, PyMaterial>>,
 ) -> PyResult<()> {
     // The core wants a stop condition; a placeholder stands in when none is
@@ -284,6 +292,7 @@ pub fn check_parameters(
         tied_planes,
         contact_penalty_factor,
         penetration_tolerance,
+        checkpoint_every,
     }
     .checked()?;
     if let Some(m) = material {
@@ -411,6 +420,8 @@ impl PySimulation {
         tied_planes = false,
         contact_penalty_factor = None,
         penetration_tolerance = None,
+        checkpoint_every = None,
+        resume_from = None,
     ))]
     // The Python keyword arguments: one per solver knob.
     #[allow(clippy::too_many_arguments)]
@@ -439,6 +450,8 @@ impl PySimulation {
         tied_planes: bool,
         contact_penalty_factor: Option<f64>,
         penetration_tolerance: Option<f64>,
+        checkpoint_every: Option<i64>,
+        resume_from: Option<&[u8]>,
     ) -> PyResult<Self> {
         if until_density.is_none() && until_time_s.is_none() {
             return Err(pyo3::exceptions::PyValueError::new_err(
@@ -468,14 +481,22 @@ impl PySimulation {
             tied_planes,
             contact_penalty_factor,
             penetration_tolerance,
+            checkpoint_every,
         }
         .checked()?;
         let cell = cell.get().inner.clone();
         let material = material.get().inner;
+        let checkpoint = resume_from
+            .map(Checkpoint::from_bytes)
+            .transpose()
+            .map_err(|e| solver_error(e, Phase::Setup))?;
         let (sim, element_particle) = py
             .detach(move || {
                 let scene = Scene::from_cell(&cell, &options)?.with_element(kind)?;
-                let sim = Simulation::new(&scene, material, settings)?;
+                let sim = match &checkpoint {
+                    Some(c) => Simulation::resume(&scene, material, settings, c)?,
+                    None => Simulation::new(&scene, material, settings)?,
+                };
                 Ok((sim, element_particles(&scene)))
             })
             .map_err(|e| solver_error(e, Phase::Setup))?;
@@ -488,6 +509,18 @@ impl PySimulation {
             element_particle,
             sim: Mutex::new(sim),
         })
+    }
+
+    /// The run's state as bytes, to write to a file and give back as
+    /// `Simulation(..., resume_from=bytes)` with the same case. Taken right
+    /// after a step that is a multiple of checkpoint_every, the resumed run
+    /// goes on bit for bit like this one.
+    fn checkpoint<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyBytes>> {
+        let bytes = py.detach(|| -> PyResult<Vec<u8>> {
+            let sim = self.sim.lock().map_err(|_| poisoned())?;
+            Ok(sim.checkpoint().to_bytes())
+        })?;
+        Ok(pyo3::types::PyBytes::new(py, &bytes))
     }
 
     /// One converged step (GIL released); returns its curve point.

@@ -49,7 +49,7 @@ pub struct Constraints {
 }
 
 /// The contact state of the rigid planes, saved to redo a step from.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PlaneContactState {
     /// For each dof: `Some(high)` while in contact with that plane.
     contact: Vec<Option<bool>>,

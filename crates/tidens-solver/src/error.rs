@@ -35,6 +35,9 @@ pub enum SolverError {
         dt: f64,
         reason: StepFailure,
     },
+    /// A checkpoint that cannot be read or does not belong to this run.
+    #[error("checkpoint: {0}")]
+    Checkpoint(String),
     /// A broken invariant of the solver (a bug: please report it).
     #[error("internal error: {0}")]
     Internal(&'static str),

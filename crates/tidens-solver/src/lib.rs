@@ -13,6 +13,7 @@
 
 mod assembler;
 mod cell;
+mod checkpoint;
 pub mod constraints;
 mod error;
 mod evaluation;
@@ -29,6 +30,7 @@ mod simulation;
 mod step_control;
 
 pub use cell::{ASPECT_RANGE, Cell, DEFAULT_SIZE_RATIO, Octant, RADIUS_RANGE, SIZE_RATIO_RANGE};
+pub use checkpoint::Checkpoint;
 pub use error::{LinearError, SolverError, StepFailure};
 pub use load::LoadHistory;
 pub use load_path::TOUCH_TOLERANCE;

@@ -76,7 +76,7 @@ pub enum Factorization {
 }
 
 /// Counts of factorisations and solves done.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct FactorizationCounts {
     pub llt: usize,
     pub lblt: usize,
@@ -184,6 +184,13 @@ impl LinearSolver {
     /// Forgets the numeric factor.
     pub fn invalidate(&mut self) {
         self.numeric = Numeric::None;
+    }
+
+    /// Forgets the factor, its pattern and the memory of indefinite
+    /// tangents: the solver is as new (but for its counts).
+    pub fn forget(&mut self) {
+        self.reset_pattern();
+        self.indefinite_run = 0;
     }
 
     /// Forgets the symbolic structure too (the sparsity pattern changed).

@@ -75,7 +75,7 @@ pub struct Fields {
 }
 
 /// Totals of a run so far.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct RunStats {
     pub steps: usize,
     pub newton_iterations: usize,

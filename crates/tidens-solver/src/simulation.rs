@@ -18,7 +18,7 @@ use tidens_fem::{Body, ElementFields, SparseSystem};
 use tidens_material::Material;
 
 /// The last accepted step, for the predictor of the next one.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(crate) struct PreviousStep {
     /// Displacement at its start \[mm\].
     pub u: Vec<f64>,
@@ -30,7 +30,7 @@ pub(crate) struct PreviousStep {
 
 /// The state at the last converged step: what a rejected or failed step
 /// returns to.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub(crate) struct ConvergedState {
     /// Time \[s\].
     pub time: f64,
@@ -229,7 +229,8 @@ impl Simulation {
     pub fn stats(&self) -> RunStats {
         let mut s = self.stats;
         s.factorizations = self.linear.counts;
-        s.pattern_rebuilds = self.assembler.pattern_rebuilds();
+        // Patterns of assemblers forgotten at checkpoint steps, and this one's.
+        s.pattern_rebuilds = self.stats.pattern_rebuilds + self.assembler.pattern_rebuilds();
         s
     }
 
@@ -302,7 +303,7 @@ impl Simulation {
     }
 
     /// The stop condition, if met by the last converged state.
-    fn check_stop(&mut self) {
+    pub(crate) fn check_stop(&mut self) {
         let rho = self.rel_density();
         if self.settings.until_density.is_some_and(|r| rho >= r) {
             self.status = Status::ReachedDensity;
@@ -426,6 +427,10 @@ impl Simulation {
                     }
                 }
             }
+        }
+        let every = self.settings.checkpoint_every;
+        if every > 0 && self.stats.steps.is_multiple_of(every) {
+            self.forget_caches();
         }
         self.check_stop();
         self.curve

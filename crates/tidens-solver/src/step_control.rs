@@ -39,7 +39,7 @@ const MOVED_STRAIN: f64 = 1e-6;
 const NOISE_FACTOR: f64 = 10.0;
 
 /// One accepted step's contribution to the windowed rate trend.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 struct RateSample {
     /// Step \[s\].
     dt: f64,
@@ -65,7 +65,7 @@ pub struct StepAssessment {
 }
 
 /// The step-size controller and its memory of the rate.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StepController {
     tolerance: f64,
     max_strain_increment: f64,

@@ -119,3 +119,68 @@ fn a_step_that_fails_at_every_size_reports_a_typed_reason() {
     assert_eq!(sim.curve().len(), 1);
     assert_eq!(sim.curve()[0].time, 0.0);
 }
+
+/// A run stopped at a checkpoint step, written to bytes, read back and
+/// resumed, ends with the same curve, bit for bit, as the run that went
+/// through: bcc (particle contact, plane contact, contact multipliers,
+/// step-size memory), stopped in the middle.
+#[test]
+fn a_run_resumed_from_a_checkpoint_goes_on_bit_for_bit() {
+    use tidens_solver::Checkpoint;
+    let scene = Scene::from_cell(
+        &Cell::bcc(0.05, 1.0).unwrap(),
+        &MeshOptions {
+            level: 1,
+            ..MeshOptions::default()
+        },
+    )
+    .unwrap();
+    let material = Preset::Ti64Creep1293K.material();
+    let mut settings = Settings::new(LoadHistory {
+        stress: 15.0,
+        knockdown: 1.0,
+        ramp_time: 1.0,
+    });
+    settings.until_density = Some(0.8);
+    settings.tolerance = 0.02;
+    settings.checkpoint_every = 20;
+    let mut through = Simulation::new(&scene, material, settings.clone()).unwrap();
+    while through.status() == Status::Running {
+        through.advance().unwrap();
+    }
+    let steps = through.curve().len() - 1;
+    assert!(steps > 60, "{steps} steps");
+    // Stopped at step 40, in the middle.
+    let mut first = Simulation::new(&scene, material, settings.clone()).unwrap();
+    while first.curve().len() - 1 < 40 {
+        first.advance().unwrap();
+    }
+    let saved = first.checkpoint();
+    assert!(saved.exact() && saved.step() == 40);
+    drop(first);
+    let read = Checkpoint::from_bytes(&saved.to_bytes()).unwrap();
+    let mut resumed = Simulation::resume(&scene, material, settings.clone(), &read).unwrap();
+    while resumed.status() == Status::Running {
+        resumed.advance().unwrap();
+    }
+    assert_eq!(resumed.curve(), through.curve());
+    assert_eq!(
+        resumed.stats().newton_iterations,
+        through.stats().newton_iterations
+    );
+    assert_eq!(
+        resumed.stats().factorizations,
+        through.stats().factorizations
+    );
+    // Another material, or other settings, are refused.
+    let mut other = settings.clone();
+    other.tolerance = 0.01;
+    assert!(matches!(
+        Simulation::resume(&scene, material, other, &read),
+        Err(SolverError::Checkpoint(_))
+    ));
+    assert!(matches!(
+        Checkpoint::from_bytes(b"not a checkpoint"),
+        Err(SolverError::Checkpoint(_))
+    ));
+}

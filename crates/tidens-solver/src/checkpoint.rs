@@ -1,0 +1,179 @@
+//! Checkpoints: the state a run hands from one step to the next, written
+//! out so that a stopped run can go on.
+//!
+//! A run keeps some things only for speed: the factor of the tangent
+//! (reused across steps while the contact set holds) and the sparsity
+//! pattern grown for particle contacts. Every `Settings::checkpoint_every`
+//! steps it forgets them, so that at those steps its whole state is what a
+//! [`Checkpoint`] holds; a simulation resumed from one then takes the same
+//! steps, to the bit, as the run that wrote it.
+
+use crate::constraints::PlaneContactState;
+use crate::error::SolverError;
+use crate::output::{CurvePoint, RunStats, Status};
+use crate::scene::Scene;
+use crate::settings::Settings;
+use crate::simulation::{ConvergedState, Simulation};
+use crate::step_control::StepController;
+use serde::{Deserialize, Serialize};
+use tidens_contact::ContactCheckpoint;
+use tidens_material::{Material, PointState};
+
+/// The format version written into each checkpoint.
+const VERSION: u32 = 1;
+
+/// Everything of a run at a step: converged state, material history,
+/// contact sets and multipliers, the step controller, the curve and the
+/// totals, and the settings it ran with.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Checkpoint {
+    version: u32,
+    settings: Settings,
+    material: Material,
+    degrees_of_freedom: usize,
+    state: ConvergedState,
+    points: Vec<PointState>,
+    planes: PlaneContactState,
+    contact: Option<ContactCheckpoint>,
+    control: StepController,
+    curve: Vec<CurvePoint>,
+    stats: RunStats,
+    counts: crate::linear::FactorizationCounts,
+    status: Status,
+}
+
+impl Checkpoint {
+    /// The step it was taken at.
+    pub fn step(&self) -> usize {
+        self.stats.steps
+    }
+
+    /// Whether it was taken where the run had just forgotten its caches, so
+    /// that a resumed run goes on bit for bit (see the module docs).
+    pub fn exact(&self) -> bool {
+        let every = self.settings.checkpoint_every;
+        every > 0 && self.stats.steps.is_multiple_of(every)
+    }
+
+    /// The settings of the run.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// The checkpoint as bytes (CBOR: every number bit for bit).
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        // Writing into memory cannot fail.
+        let _ = ciborium::into_writer(self, &mut out);
+        out
+    }
+
+    /// A checkpoint from [`Checkpoint::to_bytes`].
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self, SolverError> {
+        let c: Checkpoint = ciborium::from_reader(bytes)
+            .map_err(|e| SolverError::Checkpoint(format!("cannot be read ({e})")))?;
+        if c.version != VERSION {
+            return Err(SolverError::Checkpoint(format!(
+                "format version {} (this tidens reads {VERSION})",
+                c.version
+            )));
+        }
+        Ok(c)
+    }
+}
+
+impl Simulation {
+    /// The run's state now; exact for a resume when taken right after a
+    /// step that is a multiple of `checkpoint_every` ([`Checkpoint::exact`]).
+    pub fn checkpoint(&self) -> Checkpoint {
+        Checkpoint {
+            version: VERSION,
+            settings: self.settings.clone(),
+            material: *self.body.material(),
+            degrees_of_freedom: self.constraints.dof_count(),
+            state: self.state.clone(),
+            points: self.body.states().to_vec(),
+            planes: self.constraints.contact_state(),
+            contact: self.contact.as_ref().map(|c| c.checkpoint()),
+            control: self.control.clone(),
+            curve: self.curve.clone(),
+            stats: RunStats {
+                pattern_rebuilds: self.stats.pattern_rebuilds + self.assembler.pattern_rebuilds(),
+                ..self.stats
+            },
+            counts: self.linear.counts,
+            status: self.status,
+        }
+    }
+
+    /// A simulation of `scene` that goes on from `checkpoint`. The stop
+    /// conditions and the step limit are `settings`' (a run can be extended);
+    /// everything else must be what the checkpoint was taken with.
+    pub fn resume(
+        scene: &Scene,
+        material: Material,
+        settings: Settings,
+        checkpoint: &Checkpoint,
+    ) -> Result<Self, SolverError> {
+        let comparable = |s: &Settings| Settings {
+            until_density: None,
+            until_time: None,
+            max_steps: 0,
+            ..s.clone()
+        };
+        if comparable(&settings) != comparable(&checkpoint.settings) {
+            return Err(SolverError::Checkpoint(
+                "taken with other solver settings or another load".into(),
+            ));
+        }
+        if material != checkpoint.material {
+            return Err(SolverError::Checkpoint(
+                "taken with another material".into(),
+            ));
+        }
+        let mut sim = Simulation::new(scene, material, settings)?;
+        if sim.constraints.dof_count() != checkpoint.degrees_of_freedom {
+            return Err(SolverError::Checkpoint(format!(
+                "taken on a mesh of {} dofs, not this one of {}",
+                checkpoint.degrees_of_freedom,
+                sim.constraints.dof_count()
+            )));
+        }
+        sim.body
+            .restore_states(&checkpoint.points)
+            .map_err(|e| SolverError::Checkpoint(e.to_string()))?;
+        sim.constraints.set_contact_state(checkpoint.planes.clone());
+        match (sim.contact.as_mut(), &checkpoint.contact) {
+            (Some(c), Some(saved)) => c
+                .restore_checkpoint(saved)
+                .map_err(|e| SolverError::Checkpoint(e.to_string()))?,
+            (None, None) => {}
+            _ => {
+                return Err(SolverError::Checkpoint(
+                    "taken on a cell with other particle contacts".into(),
+                ));
+            }
+        }
+        sim.state = checkpoint.state.clone();
+        sim.control = checkpoint.control.clone();
+        sim.curve = checkpoint.curve.clone();
+        sim.stats = checkpoint.stats;
+        sim.linear.counts = checkpoint.counts;
+        sim.status = checkpoint.status;
+        // The stop conditions may differ from the checkpoint's run.
+        if sim.status != Status::Running {
+            sim.status = Status::Running;
+        }
+        sim.check_stop();
+        Ok(sim)
+    }
+
+    /// Forgets the factor of the tangent and the pattern grown for particle
+    /// contacts (kept only for speed): the state is then all a checkpoint holds.
+    pub(crate) fn forget_caches(&mut self) {
+        self.stats.pattern_rebuilds += self.assembler.pattern_rebuilds();
+        self.factor = None;
+        self.linear.forget();
+        self.assembler = crate::assembler::Assembler::new(&self.body, &self.constraints);
+    }
+}
