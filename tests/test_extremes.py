@@ -1,0 +1,78 @@
+"""Stiff and extreme cases on coarse meshes: each runs to its target and
+stays physical (monotone, finite, particle volume kept to its elastic part,
+penetration within tolerance), or is refused before the run with the reason;
+and the Norton similarity holds across orders of magnitude of C and stress."""
+
+import math
+
+import pytest
+
+import tidens_rs as td
+
+BASE = td.materials.TI64_CREEP_1293K
+
+
+def norton(n: float) -> td.Material:
+    """The base material with exponent n, C scaled to keep its rate at 10 MPa."""
+    return td.Material(BASE.young_mpa, BASE.poisson, BASE.creep_c * 10.0 ** (BASE.creep_n - n), n)
+
+
+def press(cell: td.Cell, material: td.Material = BASE, stress: float = 10.0, **run: float) -> td.Result:
+    case = td.Case(cell=cell, material=material, stress_mpa=stress,
+                   solver=td.SolverSettings(mesh_level=1, tolerance=0.02))
+    if not run:
+        run = {"until_density": 0.9}
+    return case.run(error_estimate=False, **run)  # type: ignore[arg-type]
+
+
+SC_CASES = {
+    "n = 1": lambda: press(td.cells.sc(), norton(1.0)),
+    "n = 15": lambda: press(td.cells.sc(), norton(15.0)),
+    "C = 1e-12": lambda: press(td.cells.sc(), td.materials.custom(1e-12, BASE.creep_n)),
+    "stress 0.1 MPa": lambda: press(td.cells.sc(), stress=0.1),
+    "stress 200 MPa": lambda: press(td.cells.sc(), stress=200.0),
+    "E/sigma 1e2": lambda: press(td.cells.sc(), BASE.with_elastic(1e3, 0.3)),
+    "E/sigma 1e7": lambda: press(td.cells.sc(), BASE.with_elastic(1e8, 0.3)),
+    "nu 0.499": lambda: press(td.cells.sc(), BASE.with_elastic(BASE.young_mpa, 0.499)),
+    "c/a 0.2": lambda: press(td.cells.sc(aspect_ratio=0.2)),
+    "c/a 5": lambda: press(td.cells.sc(aspect_ratio=5.0)),
+    "to 0.99": lambda: press(td.cells.sc(), until_density=0.99),
+    "hold 1e6 s": lambda: press(td.cells.sc(), until_time_s=1e6),
+    "bcc n = 8": lambda: press(td.cells.bcc(), norton(8.0), stress=15.0, until_density=0.85),
+    "bcc E/sigma 1e5": lambda: press(td.cells.bcc(), BASE.with_elastic(1.5e6, 0.3), stress=15.0, until_density=0.85),
+    "bcc nu 0.49": lambda: press(td.cells.bcc(), BASE.with_elastic(BASE.young_mpa, 0.49), stress=15.0, until_density=0.85),
+}
+
+
+@pytest.mark.parametrize("name", list(SC_CASES))
+def test_extreme_cases_run_and_stay_physical(name: str) -> None:
+    r = SC_CASES[name]()
+    assert r.status in ("reached_density", "reached_time")
+    checks = r.checks()
+    assert checks["ok"], checks
+
+
+def test_cases_out_of_range_are_refused_before_the_run_with_the_reason() -> None:
+    with pytest.raises(ValueError, match="young_mpa/stress = 1: must be in \\[1e2, 1e9\\].*elastic collapse"):
+        td.Case(cell=td.cells.sc(), material=BASE.with_elastic(10.0, 0.3), stress_mpa=10.0)
+    with pytest.raises(ValueError, match="creep_n \\(n\\) = 60: must be in \\[1, 50\\]"):
+        td.materials.custom(1e-30, 60.0)
+    with pytest.raises(ValueError, match="poisson \\(nu\\) = 0.5"):
+        BASE.with_elastic(BASE.young_mpa, 0.5)
+
+
+def test_norton_similarity_over_orders_of_magnitude() -> None:
+    # With E/sigma large and the 1 s ramp short next to the run, t(rho)
+    # scales as 1/(C sigma^n): C over 5 decades and the stress over 2 give
+    # the same C sigma^n t(0.9), to the time tolerance and the elastic part.
+    # (At 100 MPa t(0.9) is 2 s and the ramp is not negligible.)
+    n = BASE.creep_n
+    reduced = []
+    for c, stress in ((BASE.creep_c, 10.0), (1e-12, 10.0), (BASE.creep_c, 1.0), (BASE.creep_c, 0.1)):
+        r = press(td.cells.sc(), td.materials.custom(c, n), stress=stress)
+        t = r.time_to_density(0.9)
+        assert t is not None
+        reduced.append(c * stress**n * t)
+    spread = max(reduced) / min(reduced) - 1.0
+    assert spread < 0.03, reduced
+    assert math.isfinite(spread)
