@@ -39,6 +39,7 @@ SC_CASES = {
     "to 0.99": lambda: press(td.cells.sc(), until_density=0.99),
     "hold 1e6 s": lambda: press(td.cells.sc(), until_time_s=1e6),
     "bcc n = 8": lambda: press(td.cells.bcc(), norton(8.0), stress=15.0, until_density=0.85),
+    "bcc C = 1e-12": lambda: press(td.cells.bcc(), td.materials.custom(1e-12, BASE.creep_n), until_density=0.85),
     "bcc E/sigma 1e5": lambda: press(td.cells.bcc(), BASE.with_elastic(1.5e6, 0.3), stress=15.0, until_density=0.85),
     "bcc nu 0.49": lambda: press(td.cells.bcc(), BASE.with_elastic(BASE.young_mpa, 0.49), stress=15.0, until_density=0.85),
 }
