@@ -1,28 +1,36 @@
-//! Failed Newton attempts: cut back, restore, go on.
+//! Failed Newton attempts: cut back, restore, go on; checkpoints.
 
 use tidens_solver::{
     Cell, CurvePoint, LoadHistory, MeshOptions, Preset, RunStats, Scene, Settings, Simulation,
     SolverError, Status, StepFailure,
 };
 
-/// The bcc cell at level 1 pressed to `until` with a Newton iteration limit;
-/// the curve, the totals, and the worst relative gap between the contact
-/// force on the top particle and the piston force over the steps.
-fn bcc(max_iterations: usize, until: f64) -> (Vec<CurvePoint>, RunStats, f64) {
-    let scene = Scene::from_cell(
-        &Cell::bcc(0.05, 1.0).unwrap(),
-        &MeshOptions {
-            level: 1,
-            ..MeshOptions::default()
-        },
-    )
-    .unwrap();
+/// `cell` meshed at level 1.
+fn level1(cell: Cell) -> Scene {
+    let options = MeshOptions {
+        level: 1,
+        ..MeshOptions::default()
+    };
+    Scene::from_cell(&cell, &options).unwrap()
+}
+
+/// Settings for `stress` \[MPa\] ramped over 1 s, to density `until`.
+fn pressed(stress: f64, until: f64) -> Settings {
     let mut settings = Settings::new(LoadHistory {
-        stress: 15.0,
+        stress,
         knockdown: 1.0,
         ramp_time: 1.0,
     });
     settings.until_density = Some(until);
+    settings
+}
+
+/// The bcc cell at level 1 pressed to `until` with a Newton iteration limit;
+/// the curve, the totals, and the worst relative gap between the contact
+/// force on the top particle and the piston force over the steps.
+fn bcc(max_iterations: usize, until: f64) -> (Vec<CurvePoint>, RunStats, f64) {
+    let scene = level1(Cell::bcc(0.05, 1.0).unwrap());
+    let mut settings = pressed(15.0, until);
     settings.tolerance = 0.02;
     settings.newton.max_iterations = max_iterations;
     settings.newton.residual_tolerance = 1e-7;
@@ -77,20 +85,8 @@ fn failed_newton_attempts_cut_back_restore_the_state_and_go_on() {
 /// reason, where and when it happened, and leaves the last converged state.
 #[test]
 fn a_step_that_fails_at_every_size_reports_a_typed_reason() {
-    let scene = Scene::from_cell(
-        &Cell::sc(0.05, 1.0).unwrap(),
-        &MeshOptions {
-            level: 1,
-            ..MeshOptions::default()
-        },
-    )
-    .unwrap();
-    let mut settings = Settings::new(LoadHistory {
-        stress: 10.0,
-        knockdown: 1.0,
-        ramp_time: 1.0,
-    });
-    settings.until_density = Some(0.8);
+    let scene = level1(Cell::sc(0.05, 1.0).unwrap());
+    let mut settings = pressed(10.0, 0.8);
     // One iteration to a residual near round-off: creep makes the first
     // step nonlinear, so one Newton iteration cannot get there.
     settings.newton.max_iterations = 1;
@@ -127,21 +123,9 @@ fn a_step_that_fails_at_every_size_reports_a_typed_reason() {
 #[test]
 fn a_run_resumed_from_a_checkpoint_goes_on_bit_for_bit() {
     use tidens_solver::Checkpoint;
-    let scene = Scene::from_cell(
-        &Cell::bcc(0.05, 1.0).unwrap(),
-        &MeshOptions {
-            level: 1,
-            ..MeshOptions::default()
-        },
-    )
-    .unwrap();
+    let scene = level1(Cell::bcc(0.05, 1.0).unwrap());
     let material = Preset::Ti64Creep1293K.material();
-    let mut settings = Settings::new(LoadHistory {
-        stress: 15.0,
-        knockdown: 1.0,
-        ramp_time: 1.0,
-    });
-    settings.until_density = Some(0.8);
+    let mut settings = pressed(15.0, 0.8);
     settings.tolerance = 0.02;
     settings.checkpoint_every = 20;
     let mut through = Simulation::new(&scene, material, settings.clone()).unwrap();
