@@ -94,18 +94,13 @@ class SolverSettings:
         solver aims at half of it. The curve reports the penetration reached
         (``max_penetration_mm``).
     checkpoint_every
-        0 (the default), or the steps between checkpoints that resume bit
-        for bit: at those steps the solver drops what it keeps only for
+        Steps between checkpoints (``checkpoint.bin`` in the output folder;
+        default 50): at those steps the solver drops what it keeps only for
         speed (the factor of the tangent, the pattern grown for particle
-        contacts), so that :func:`resume` from there goes on exactly like an
-        uninterrupted run. Checkpoints (``checkpoint.bin`` in the output
-        folder) are written every ``checkpoint_every`` steps, or every
-        ``CHECKPOINT_INTERVAL`` steps when it is 0, and at any stop; resumed
-        from one that is not at such a step, a run agrees with the
-        uninterrupted one within the Newton tolerance. Not the default:
-        dropping the factor perturbs a run at round-off level, and the step
-        sequence can react to that (bcc at level 2 to rho = 0.85: 508 steps
-        with 50, 261 without, the same curve within its tolerance).
+        contacts), so that :func:`resume` goes on bit for bit like an
+        uninterrupted run. 0: no such steps; checkpoints are then written
+        every ``CHECKPOINT_INTERVAL`` steps and at any stop, and a resumed
+        run agrees with the uninterrupted one within the Newton tolerance.
 
     The contact *model* (frictionless or tied particle contact, tied die
     walls) is physics, not a solver knob: it is :attr:`Case.contact` and
