@@ -160,3 +160,16 @@ def test_resume_refuses_a_folder_without_a_run_and_case_options(tmp_path: Path, 
     with pytest.raises(SystemExit) as e:
         main(["run", "--resume", str(tmp_path), "--stress", "10"])
     assert e.value.code == 2 and "leave out --stress" in capsys.readouterr().err
+
+
+def test_a_damaged_run_record_or_checkpoint_is_refused_naming_it(quick_case: td.Case, tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    quick_case.run(until_density=0.56, out_dir=out, error_estimate=False)
+    checkpoint = (out / "checkpoint.bin").read_bytes()
+    (out / "checkpoint.bin").write_bytes(checkpoint[: len(checkpoint) // 2])
+    with pytest.raises(ValueError, match="checkpoint: cannot be read"):
+        td.resume(out)
+    (out / "checkpoint.bin").write_bytes(checkpoint)
+    (out / "run.json").write_text("{\"case\": 3}")
+    with pytest.raises(ValueError, match="run.json: not the record of a run"):
+        td.resume(out)

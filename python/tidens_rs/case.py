@@ -94,8 +94,8 @@ class SolverSettings:
         solver aims at half of it. The curve reports the penetration reached
         (``max_penetration_mm``).
     checkpoint_every
-        Steps between checkpoints (``checkpoint.bin`` in the output folder;
-        default 50): at those steps the solver drops what it keeps only for
+        Steps between checkpoints (``checkpoint.bin`` in the output folder,
+        also written at the start; default 50): at those steps the solver drops what it keeps only for
         speed (the factor of the tangent, the pattern grown for particle
         contacts), so that :func:`resume` goes on bit for bit like an
         uninterrupted run. 0: no such steps; checkpoints are then written
@@ -522,6 +522,10 @@ class Case:
                 restored = sim.curve()
                 for k in range(len(restored["time_s"])):
                     writer.write({c: v[k] for c, v in restored.items()})
+            if checkpoint_path is not None and len(sim.curve()["time_s"]) == 1:
+                # The initial state: a run stopped before its first periodic
+                # checkpoint resumes from the start (exactly: nothing cached yet).
+                io.atomic_write(checkpoint_path, lambda tmp: tmp.write_bytes(sim.checkpoint()))
             while sim.status == "running":
                 p = sim.advance()
                 if writer is not None:
@@ -624,9 +628,10 @@ def resume(
     callback: ProgressCallback | None = None,
 ) -> Result:
     """Goes on with the run whose outputs are in ``out_dir``, from its last
-    checkpoint (``checkpoint.bin``, written every
-    ``SolverSettings.checkpoint_every`` steps and at any stop: Ctrl-C, a
-    failure, the step limit, the end), with the case and the run's
+    checkpoint (``checkpoint.bin``, written at the start and every
+    ``SolverSettings.checkpoint_every`` steps; with ``checkpoint_every = 0``
+    every ``CHECKPOINT_INTERVAL`` steps and at any stop: Ctrl-C, a failure,
+    the step limit, the end), with the case and the run's
     arguments it recorded (``run.json``). The curve, the summary and the
     fields are those the uninterrupted run would have written: to the bit
     when the checkpoint was taken at a multiple of
@@ -643,10 +648,13 @@ def resume(
         raise FileNotFoundError(
             f"{out}: no run to resume ({' and '.join(missing)} missing): a run writes them when it has an output folder"
         )
-    data = json.loads(run_file.read_text())
-    case = Case.from_dict(data["case"])
-    args = data["run"]
-    until_density, until_time_s = args["until_density"], args["until_time_s"]
+    try:
+        data = json.loads(run_file.read_text())
+        case = Case.from_dict(data["case"])
+        args = data["run"]
+        until_density, until_time_s = args["until_density"], args["until_time_s"]
+    except (ValueError, TypeError, KeyError) as e:
+        raise ValueError(f"{run_file}: not the record of a run ({type(e).__name__}: {e})") from e
     earlier = [(t, name) for t, name in io.read_pvd(out / "fields.pvd") if name != "fields_final.vtu"]
     sim = case.simulation(until_density, until_time_s, args["snapshot_times_s"], resume_from=checkpoint.read_bytes())
     result, error = case._press(

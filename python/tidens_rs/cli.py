@@ -136,7 +136,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--max-steps", type=int, default=_DEFAULTS.max_steps, help=f"step limit (default {_DEFAULTS.max_steps})")
     g = p.add_argument_group("output")
     g.add_argument("--out", type=_folder, help="output folder, new or empty (see --overwrite); required but with --resume")
-    g.add_argument("--resume", type=_folder, metavar="DIR", help="go on with the run in DIR from its last checkpoint (written every --checkpoint-every steps and at any stop), with the case it recorded: no other case option")
+    g.add_argument("--resume", type=_folder, metavar="DIR", help="go on with the run in DIR from its last checkpoint (written at the start and every --checkpoint-every steps), with the case it recorded: no other case option")
     g.add_argument("--checkpoint-every", type=int, default=_DEFAULTS.checkpoint_every, help=f"steps between checkpoints in --out, from which --resume goes on bit for bit (the solver drops its cached factor there; default {_DEFAULTS.checkpoint_every}); 0: checkpoints every 50 steps and at any stop, resumed within the Newton tolerance")
     g.add_argument("--overwrite", action="store_true", help="first delete the outputs of an earlier run in --out (curve, summary, fields, plot; nothing else)")
     g.add_argument("--vtu-densities", type=_float_list, help="comma-separated densities for VTU snapshots (default those of 0.6,0.7,0.8,0.9 above the cell's rho0)")

@@ -355,7 +355,10 @@ impl Progress {
 /// largest plastic strain increment per step in (0, 2]; dt_initial_s, dt_max_s
 /// [s]; max_steps; time_targets_s [s], times a step must end on; Newton:
 /// newton_max_iterations per attempt, newton_residual_tolerance relative to
-/// the piston force. A value out of range raises ValueError naming it.
+/// the piston force; checkpoint_every, the steps at which the solver drops
+/// its cached factor so that a checkpoint taken there resumes bit for bit.
+/// resume_from (bytes of Simulation.checkpoint()) goes on from a checkpoint
+/// of the same case. A value out of range raises ValueError naming it.
 ///
 /// Thread-safe: the step runs with the GIL released, and status, curve() and
 /// stats() can be read from another thread while it runs.
@@ -518,7 +521,9 @@ impl PySimulation {
     fn checkpoint<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyBytes>> {
         let bytes = py.detach(|| -> PyResult<Vec<u8>> {
             let sim = self.sim.lock().map_err(|_| poisoned())?;
-            Ok(sim.checkpoint().to_bytes())
+            sim.checkpoint()
+                .to_bytes()
+                .map_err(|e| solver_error(e, Phase::Run))
         })?;
         Ok(pyo3::types::PyBytes::new(py, &bytes))
     }

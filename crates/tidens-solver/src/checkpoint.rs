@@ -30,7 +30,6 @@ pub struct Checkpoint {
     version: u32,
     settings: Settings,
     material: Material,
-    degrees_of_freedom: usize,
     state: ConvergedState,
     points: Vec<PointState>,
     planes: PlaneContactState,
@@ -61,11 +60,11 @@ impl Checkpoint {
     }
 
     /// The checkpoint as bytes (CBOR: every number bit for bit).
-    pub fn to_bytes(&self) -> Vec<u8> {
+    pub fn to_bytes(&self) -> Result<Vec<u8>, SolverError> {
         let mut out = Vec::new();
-        // Writing into memory cannot fail.
-        let _ = ciborium::into_writer(self, &mut out);
-        out
+        ciborium::into_writer(self, &mut out)
+            .map_err(|e| SolverError::Checkpoint(format!("cannot be written ({e})")))?;
+        Ok(out)
     }
 
     /// A checkpoint from [`Checkpoint::to_bytes`].
@@ -90,7 +89,6 @@ impl Simulation {
             version: VERSION,
             settings: self.settings.clone(),
             material: *self.body.material(),
-            degrees_of_freedom: self.constraints.dof_count(),
             state: self.state.clone(),
             points: self.body.states().to_vec(),
             planes: self.constraints.contact_state(),
@@ -132,10 +130,10 @@ impl Simulation {
             ));
         }
         let mut sim = Simulation::new(scene, material, settings)?;
-        if sim.constraints.dof_count() != checkpoint.degrees_of_freedom {
+        if sim.constraints.dof_count() != checkpoint.state.u.len() {
             return Err(SolverError::Checkpoint(format!(
                 "taken on a mesh of {} dofs, not this one of {}",
-                checkpoint.degrees_of_freedom,
+                checkpoint.state.u.len(),
                 sim.constraints.dof_count()
             )));
         }

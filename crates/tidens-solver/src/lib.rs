@@ -28,6 +28,8 @@ mod scene;
 mod settings;
 mod simulation;
 mod step_control;
+#[cfg(test)]
+mod test_support;
 
 pub use cell::{ASPECT_RANGE, Cell, DEFAULT_SIZE_RATIO, Octant, RADIUS_RANGE, SIZE_RATIO_RANGE};
 pub use checkpoint::Checkpoint;

@@ -525,30 +525,17 @@ impl Simulation {
 
 #[cfg(test)]
 mod tests {
-    use super::*;
-    use crate::{Cell, LoadHistory, MeshOptions, NewtonSettings, Preset};
+    use crate::NewtonSettings;
 
     /// A failed attempt changes the contact state (planes caught or
     /// released, particle contact pressures), and the cut back restores it
     /// exactly, so the retry starts from the last converged step.
     #[test]
     fn a_failed_attempt_is_undone_exactly() {
-        let scene = Scene::from_cell(
-            &Cell::bcc(0.05, 1.0).unwrap(),
-            &MeshOptions {
-                level: 1,
-                ..MeshOptions::default()
-            },
-        )
-        .unwrap();
-        let mut settings = Settings::new(LoadHistory {
-            stress: 15.0,
-            knockdown: 1.0,
-            ramp_time: 1.0,
+        let mut sim = crate::test_support::bcc_level1(|s| {
+            s.until_density = Some(0.9);
+            s.tolerance = 0.05;
         });
-        settings.until_density = Some(0.9);
-        settings.tolerance = 0.05;
-        let mut sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
         while sim.rel_density() < 0.72 {
             sim.advance().unwrap();
         }

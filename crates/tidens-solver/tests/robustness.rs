@@ -142,7 +142,7 @@ fn a_run_resumed_from_a_checkpoint_goes_on_bit_for_bit() {
     let saved = first.checkpoint();
     assert!(saved.exact() && saved.step() == 40);
     drop(first);
-    let read = Checkpoint::from_bytes(&saved.to_bytes()).unwrap();
+    let read = Checkpoint::from_bytes(&saved.to_bytes().unwrap()).unwrap();
     let mut resumed = Simulation::resume(&scene, material, settings.clone(), &read).unwrap();
     while resumed.status() == Status::Running {
         resumed.advance().unwrap();

@@ -1,0 +1,20 @@
+//! Set-ups shared by the unit tests of the solver's modules.
+
+use crate::{Cell, LoadHistory, MeshOptions, Preset, Scene, Settings, Simulation};
+
+/// The bcc cell at level 1, Ti-6Al-4V at 1293 K, 15 MPa ramped over 1 s,
+/// with `adjust` applied to the settings (stop conditions and the like).
+pub(crate) fn bcc_level1(adjust: impl FnOnce(&mut Settings)) -> Simulation {
+    let options = MeshOptions {
+        level: 1,
+        ..MeshOptions::default()
+    };
+    let scene = Scene::from_cell(&Cell::bcc(0.05, 1.0).unwrap(), &options).unwrap();
+    let mut settings = Settings::new(LoadHistory {
+        stress: 15.0,
+        knockdown: 1.0,
+        ramp_time: 1.0,
+    });
+    adjust(&mut settings);
+    Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap()
+}
