@@ -92,7 +92,9 @@ def estimate_of(runs: dict[str, Any], r: dict[str, Any]) -> ErrorEstimate | None
         return None
     _, _, until = CASES[r["case"]]
     marks = [x for x in MARKS if x <= until]
-    return estimate_error(as_result_arrays(r), as_result_arrays(below), marks, level=r["level"], companion_level=r["level"] - 1)
+    return estimate_error(
+        as_result_arrays(r), as_result_arrays(below), marks, level=r["level"], companion_level=r["level"] - 1, element=r["element"]
+    )
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -45,12 +45,15 @@ from tidens_rs._core import LEVEL_DIVISIONS as DIVISIONS
 HERE = Path(__file__).resolve().parent
 
 
-def run(case: str, level: int, tolerance: float, exact_volume: bool) -> dict[str, Any]:
-    _, _, until = CASES[case]
+def run(case: str, level: int, tolerance: float, exact_volume: bool, until: float | None = None) -> dict[str, Any]:
+    """One run of the ladder, to the case's final density or to ``until``."""
+    until = CASES[case][2] if until is None else until
     # Newton converged tighter than the default, as a reference should be.
     c = case_of(case, mesh_level=level, tolerance=tolerance, exact_volume=exact_volume, newton_residual_tolerance=1e-6)
     t0 = time.perf_counter()
-    r = c.run(until_density=until)
+    # A reference needs no error estimate of its own (its companion would
+    # add a third to the cost, and to the wall time stored).
+    r = c.run(until_density=until, error_estimate=False)
     wall = time.perf_counter() - t0
     s = r.summary()
     return {
@@ -61,6 +64,7 @@ def run(case: str, level: int, tolerance: float, exact_volume: bool) -> dict[str
         "rho0": r.rho0,
         "wall_s": wall,
         "steps": s["steps"],
+        "until_density": until,
         "times_s": {f"{x:g}": r.time_to_density(x) for x in MARKS if x <= until},
     }
 
@@ -123,6 +127,13 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--tolerances", type=float, nargs="+", default=[0.04, 0.02, 0.01, 0.005])
     ap.add_argument("--out", type=Path, default=HERE / "references.json")
     ap.add_argument(
+        "--partial",
+        nargs="+",
+        default=[],
+        metavar="LEVEL:RHO",
+        help="mesh levels run only to density RHO (e.g. 5:0.8): the densities beyond take their ladder from the other levels",
+    )
+    ap.add_argument(
         "--exact-volume",
         action=argparse.BooleanOptionalAction,
         default=td.SolverSettings().exact_volume,
@@ -135,12 +146,13 @@ def main(argv: list[str] | None = None) -> None:
     data.setdefault("cases", {})
 
     family = "exact-volume" if args.exact_volume else "on-surface"
+    partial = {int(a): float(b) for a, b in (x.split(":") for x in args.partial)}
 
     def get(case: str, level: int, tol: float) -> dict[str, Any]:
         key = f"{case}/{family}/level{level}/tol{tol:g}"
         if key not in data["runs"]:
             print(f"# run {key}", file=sys.stderr, flush=True)
-            data["runs"][key] = run(case, level, tol, args.exact_volume)
+            data["runs"][key] = run(case, level, tol, args.exact_volume, partial.get(level))
             args.out.write_text(json.dumps(data, indent=1) + "\n")
         found: dict[str, Any] = data["runs"][key]
         return found
@@ -159,8 +171,10 @@ def main(argv: list[str] | None = None) -> None:
         out: dict[str, Any] = {"mesh_family": family, "times_s": {}, "uncertainty_s": {}, "mesh": {}, "time": {}}
         for x in marks:
             k = f"{x:g}"
-            tm = [r["times_s"][k] for r in mesh_runs]
-            mesh = ladder(h, tm, 2.0, (1.0, 4.0))
+            # The levels whose runs reached this density.
+            reached = [i for i, r in enumerate(mesh_runs) if k in r["times_s"]]
+            tm = [mesh_runs[i]["times_s"][k] for i in reached]
+            mesh = ladder([h[i] for i in reached], tm, 2.0, (1.0, 4.0))
             tt = [r["times_s"][k] for r in time_runs]
             # The tolerance ladder sorted by tolerance, the mesh ladder's last.
             order = sorted(range(len(tols)), key=lambda i: -tols[i])
@@ -173,7 +187,7 @@ def main(argv: list[str] | None = None) -> None:
             ref = mesh["limit"] + time_corr
             out["times_s"][k] = ref
             out["uncertainty_s"][k] = mesh["uncertainty"] + tl["uncertainty"]
-            out["mesh"][k] = {"levels": levels, "times_s": tm, **mesh}
+            out["mesh"][k] = {"levels": [levels[i] for i in reached], "times_s": tm, **mesh}
             out["time"][k] = {"level": args.time_level, "tolerances": xs, "times_s": ys, **tl, "correction_at_level_tolerance": time_corr}
         data["cases"][case] = out
         args.out.write_text(json.dumps(data, indent=1) + "\n")
@@ -183,10 +197,11 @@ def main(argv: list[str] | None = None) -> None:
         for x in marks:
             k = f"{x:g}"
             m, t = out["mesh"][k], out["time"][k]
+            cells = {lv: v for lv, v in zip(m["levels"], m["times_s"])}
             po = ("-" if m["order"] is None else f"{m['order']:.2f}") + ("" if m["extrapolated"] else " (not used)")
             qo = ("-" if t["order"] is None else f"{t['order']:.2f}") + ("" if t["extrapolated"] else " (not used)")
             print(
-                f"| {k} | " + " | ".join(f"{v:.2f}" for v in m["times_s"]) + f" | {po} | {m['limit']:.2f} | {qo} | {t['correction_at_level_tolerance']:+.3f} | {out['times_s'][k]:.2f} | {100 * out['uncertainty_s'][k] / out['times_s'][k]:.2f} % |"
+                f"| {k} | " + " | ".join(f"{cells[lv]:.2f}" if lv in cells else "-" for lv in levels) + f" | {po} | {m['limit']:.2f} | {qo} | {t['correction_at_level_tolerance']:+.3f} | {out['times_s'][k]:.2f} | {100 * out['uncertainty_s'][k] / out['times_s'][k]:.2f} % |"
             )
     print(f"\nwrote {args.out}")
 

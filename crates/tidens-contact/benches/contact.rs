@@ -71,6 +71,7 @@ fn pressed_octants() -> (Vec<f64>, ParticleContact) {
             mode: ContactMode::Frictionless,
             penalty: 10.0 * YOUNG / h,
             search_distance: h,
+            curvature_stiffness: true,
         },
     )
     .expect("contact settings");

@@ -17,7 +17,10 @@
 //!   (where the pressure is positive) the consistent tangent
 //!   `A/2 (eps dp/du (x) dp/du + (lambda + eps p) d2p/du2)`, symmetric, both
 //!   exact: the derivatives of the penetration are written in closed form in
-//!   [`mod@penetration`]. Between Newton solves,
+//!   [`mod@penetration`]. The curvature part `(lambda + eps p) d2p/du2` is
+//!   indefinite; [`ContactSettings::curvature_stiffness`] says whether the
+//!   tangent carries it (the consistent tangent) or leaves it out (a positive
+//!   semi-definite one, which the solver uses). Between Newton solves,
 //!   [`ParticleContact::augment`] updates the multipliers (Uzawa) until the
 //!   penetration is below its tolerance.
 //! - within a step each node keeps the facet it was paired with at the
@@ -70,6 +73,16 @@ pub struct ContactSettings {
     /// Search distance: nodes farther than this from the other surface are
     /// not candidates \[mm\].
     pub search_distance: f64,
+    /// Whether a frictionless term's tangent holds the curvature part
+    /// `a p d2g/du2` (the consistent tangent) beside the penalty part
+    /// `a eps dg/du dg/du^T`. The curvature part is indefinite; without it
+    /// each term's tangent is positive semi-definite, Newton converges
+    /// linearly near the contact edge instead of quadratically, but every
+    /// iteration's direction is one of descent: on the bcc and fcc cells at
+    /// level 2 the runs take 30 to 35 % fewer Newton iterations and half
+    /// the linear-algebra time, with no indefinite factorisation (there were
+    /// 15 to 35 %). Tied terms always have their consistent tangent.
+    pub curvature_stiffness: bool,
 }
 
 /// One slave node's link to a master facet, with its contribution.
@@ -79,7 +92,9 @@ pub struct ContactTerm {
     pub dofs: [usize; TERM_DOFS],
     /// Contribution to the internal force \[N\].
     pub force: [f64; TERM_DOFS],
-    /// Consistent tangent, row-major 15x15 \[N/mm\] (empty if not requested).
+    /// Tangent, row-major 15x15 \[N/mm\] (empty if not requested): the
+    /// consistent one, or without its curvature part (see
+    /// [`ContactSettings::curvature_stiffness`]).
     pub tangent: Vec<f64>,
     /// Contact pressure (tied: traction magnitude) at the slave node \[MPa\].
     pub pressure: f64,
@@ -463,7 +478,7 @@ impl ParticleContact {
         }
         let area = 0.5 * self.surfaces[s].areas[k];
         let eps = self.settings.penalty;
-        let (pen, grad, hess) = if with_tangent {
+        let (pen, grad, hess) = if with_tangent && self.settings.curvature_stiffness {
             let d = facet::hessian_on(kind, &p, &q, xi);
             (d.value, d.gradient, Some(d.hessian))
         } else {
@@ -483,21 +498,28 @@ impl ParticleContact {
         for (f, g) in force.iter_mut().zip(grad.iter()) {
             *f = area * pressure * g;
         }
-        let tangent = match hess {
-            Some(h) => {
-                let stiffness = if pressure > 0.0 {
-                    eps
-                } else {
-                    TOUCH_STIFFNESS * eps
-                };
-                let (kg, kh) = (area * stiffness, area * pressure);
+        let stiffness = if pressure > 0.0 {
+            eps
+        } else {
+            TOUCH_STIFFNESS * eps
+        };
+        let (kg, kh) = (area * stiffness, area * pressure);
+        let tangent = match (with_tangent, hess) {
+            (true, Some(h)) => {
                 let mut k = Vec::with_capacity(TERM_DOFS * TERM_DOFS);
                 for (gi, hi) in grad.iter().zip(&h) {
                     k.extend(grad.iter().zip(hi).map(|(gj, hij)| gi * gj * kg + hij * kh));
                 }
                 k
             }
-            None => Vec::new(),
+            (true, None) => {
+                let mut k = Vec::with_capacity(TERM_DOFS * TERM_DOFS);
+                for gi in &grad {
+                    k.extend(grad.iter().map(|gj| gi * gj * kg));
+                }
+                k
+            }
+            (false, _) => Vec::new(),
         };
         Some(ContactTerm {
             dofs,

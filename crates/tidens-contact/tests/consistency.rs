@@ -115,6 +115,7 @@ fn tied_contact_tangent_equals_finite_differences_of_the_force() {
                 mode: ContactMode::Tied,
                 penalty: 100.0,
                 search_distance: 0.3,
+                curvature_stiffness: true,
             },
         )
         .unwrap();
@@ -140,6 +141,7 @@ fn check_tangent(surfaces: Vec<ContactSurface>, nodes: &[[f64; 3]]) {
             mode: ContactMode::Frictionless,
             penalty: 100.0,
             search_distance: 0.3,
+            curvature_stiffness: true,
         },
     )
     .unwrap();
@@ -182,4 +184,61 @@ fn check_tangent_of(contact: &ParticleContact, nodes: &[[f64; 3]]) {
             );
         }
     }
+}
+
+/// Without its curvature part (`curvature_stiffness: false`, the solver's
+/// choice) each pressed term's tangent is the penalty part alone, positive
+/// semi-definite; the part left out, the consistent tangent's curvature
+/// `a p d2g/du2`, is indefinite (it is what made a tenth to a third of the
+/// factorisations on the bcc and fcc cells indefinite).
+#[test]
+fn the_tangent_without_curvature_is_semidefinite_and_what_it_leaves_out_is_not() {
+    let (nodes, lower, upper) = patches(0.06);
+    let x: Vec<f64> = nodes.iter().flatten().copied().collect();
+    let contact_with = |curvature_stiffness: bool| {
+        let surfaces = vec![
+            ContactSurface::from_quads(&lower, &nodes).unwrap(),
+            ContactSurface::from_quads(&upper, &nodes).unwrap(),
+        ];
+        let settings = ContactSettings {
+            mode: ContactMode::Frictionless,
+            penalty: 100.0,
+            search_distance: 0.3,
+            curvature_stiffness,
+        };
+        let mut c = ParticleContact::new(surfaces, settings).unwrap();
+        c.pair(&x);
+        c.evaluate(&x, true)
+    };
+    let (full, plain) = (contact_with(true), contact_with(false));
+    assert_eq!(full.terms.len(), plain.terms.len());
+    let m = tidens_contact::TERM_DOFS;
+    let (mut lowest, mut left_out_lowest, mut left_out_highest) = (f64::INFINITY, 0.0_f64, 0.0_f64);
+    for (a, b) in full
+        .terms
+        .iter()
+        .zip(&plain.terms)
+        .filter(|(a, _)| a.pressure > 0.0)
+    {
+        assert_eq!(
+            (a.dofs, a.force),
+            (b.dofs, b.force),
+            "the forces do not depend on the tangent"
+        );
+        let kb = nalgebra::DMatrix::from_row_slice(m, m, &b.tangent);
+        let scale = kb.amax();
+        lowest = lowest.min(kb.clone().symmetric_eigen().eigenvalues.min() / scale);
+        let diff = nalgebra::DMatrix::from_row_slice(m, m, &a.tangent) - kb;
+        let ev = diff.symmetric_eigen().eigenvalues;
+        left_out_lowest = left_out_lowest.min(ev.min() / scale);
+        left_out_highest = left_out_highest.max(ev.max() / scale);
+    }
+    assert!(
+        lowest > -1e-12,
+        "a negative eigenvalue {lowest:e} (relative) without curvature"
+    );
+    assert!(
+        left_out_lowest < -1e-3 && left_out_highest > 1e-3,
+        "the curvature part is not indefinite: eigenvalues in [{left_out_lowest:e}, {left_out_highest:e}]"
+    );
 }

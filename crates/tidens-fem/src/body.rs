@@ -72,6 +72,15 @@ pub struct Body {
     material: Material,
     /// Material states, `kind.points()` per element.
     states: Vec<PointState>,
+    /// Largest pressure magnitude in the tangent's volumetric initial-stress
+    /// term \[MPa\] (see `mean_dilatation`); infinite: the exact tangent. A
+    /// solver setting, not part of the body's state.
+    #[serde(skip, default = "exact_tangent")]
+    tangent_pressure_cap: f64,
+}
+
+fn exact_tangent() -> f64 {
+    f64::INFINITY
 }
 
 /// Element results of one evaluation of the whole body, in flat arrays in
@@ -164,6 +173,7 @@ impl Body {
             geometry: Geometry::None,
             material,
             states: vec![PointState::default(); count * kind.points()],
+            tangent_pressure_cap: exact_tangent(),
         };
         body.rebuild_geometry()?;
         Ok(body)
@@ -218,6 +228,21 @@ impl Body {
 
     pub fn material(&self) -> &Material {
         &self.material
+    }
+
+    /// Limits the pressure in the tangent's volumetric initial-stress term
+    /// to `cap` \[MPa\] in magnitude (`f64::INFINITY`, the default: the
+    /// exact tangent). The forces, and so the solution, do not change; a
+    /// cap of the order of the stresses the solution carries keeps Newton's
+    /// directions useful from iterates with far larger transient pressures
+    /// (see `mean_dilatation`).
+    pub fn set_tangent_pressure_cap(&mut self, cap: f64) {
+        self.tangent_pressure_cap = cap;
+    }
+
+    /// The cap of [`Body::set_tangent_pressure_cap`] \[MPa\].
+    pub fn tangent_pressure_cap(&self) -> f64 {
+        self.tangent_pressure_cap
     }
 
     pub fn dof_count(&self) -> usize {
@@ -319,6 +344,7 @@ impl Body {
                     &states_n,
                     &self.material,
                     dt,
+                    self.tangent_pressure_cap,
                     residual,
                     with_tangent.then_some(tangent),
                     states,

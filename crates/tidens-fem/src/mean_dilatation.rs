@@ -35,6 +35,20 @@
 //!
 //! `a_dev` is the deviatoric spatial tangent of `tidens-material`; the middle
 //! term is the second variation of the current volume.
+//!
+//! That middle term, the volumetric initial-stress stiffness, is indefinite
+//! (the second variation of the volume has modes of either sign), and its
+//! weight `U'(theta)` is the element pressure. At a solution the pressure
+//! is of the order of the applied stress and the term is a small correction
+//! to the viscous stiffness; but a Newton iterate of a stiff material (E
+//! 1e7 times the stress) can carry pressures thousands of times larger
+//! (the extrapolated predictor of an isochoric flow changes each element's
+//! volume at second order in the step's strain, by about 1e-4, and K times
+//! that is 1e4 MPa), which makes the whole tangent indefinite and the Newton
+//! directions useless. [`evaluate_into`] therefore limits `|U'(theta)|` in
+//! this term to a `pressure_cap` given by the caller (infinite: the exact
+//! tangent); the residual keeps the exact pressure, so the solution is
+//! unchanged and, where the pressure is below the cap, so is the tangent.
 
 use crate::error::FemError;
 use crate::reference::{Hex8, ReferenceElement, Tet10, Tet10Degree3};
@@ -311,6 +325,7 @@ pub fn evaluate<const NEN: usize, const NGP: usize, const NXP: usize, const NDOF
         states_n,
         material,
         dt,
+        f64::INFINITY,
         &mut residual,
         with_tangent.then_some(tangent.as_mut_slice()),
         &mut states,
@@ -330,7 +345,10 @@ pub fn evaluate<const NEN: usize, const NGP: usize, const NXP: usize, const NDOF
 /// [`evaluate`] into the caller's buffers: the internal force into
 /// `residual` \[N\], the consistent tangent (row-major `NDOF x NDOF`,
 /// \[N/mm\]) into `tangent` when given (overwritten), the material states at
-/// the end of the step into `states`. No heap allocation.
+/// the end of the step into `states`. No heap allocation. The pressure in
+/// the tangent's volumetric initial-stress term is limited to
+/// `pressure_cap` \[MPa\] in magnitude (see the module docs; infinite for
+/// the exact tangent).
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate_into<const NEN: usize, const NGP: usize, const NXP: usize, const NDOF: usize>(
     element: usize,
@@ -339,6 +357,7 @@ pub fn evaluate_into<const NEN: usize, const NGP: usize, const NXP: usize, const
     states_n: &[PointState; NGP],
     material: &Material,
     dt: f64,
+    pressure_cap: f64,
     residual: &mut [f64; NDOF],
     mut tangent: Option<&mut [f64]>,
     states: &mut [PointState; NGP],
@@ -440,6 +459,8 @@ pub fn evaluate_into<const NEN: usize, const NGP: usize, const NXP: usize, const
         *r += u1 * d;
     }
     if let Some(tangent) = tangent {
+        // The initial-stress term at the pressure, limited (module docs).
+        let u1 = u1.clamp(-pressure_cap, pressure_cap);
         for gp in 0..NGP {
             let c = u1 * geom.volume_weight[gp] * jdet[gp];
             add_volume_curvature::<NEN, NDOF>(tangent, c, &gx[gp]);

@@ -21,6 +21,15 @@ pub struct NewtonSettings {
     /// Start each step from the displacement extrapolated from the previous
     /// two steps (default true).
     pub extrapolate: bool,
+    /// Factorise the consistent tangent (true) or, by default, a positive
+    /// definite one that leaves out the indefinite initial-stress parts
+    /// where they would dominate: the particle contacts' curvature part
+    /// (`ContactSettings::curvature_stiffness`) and the elements'
+    /// volumetric initial-stress term beyond a pressure of 10 f sigma
+    /// (`Body::set_tangent_pressure_cap`). The residual, and so the
+    /// solution, is the same either way; the consistent tangent is for tests
+    /// of the derivatives.
+    pub consistent_tangent: bool,
 }
 
 impl Default for NewtonSettings {
@@ -29,6 +38,7 @@ impl Default for NewtonSettings {
             max_iterations: 25,
             residual_tolerance: 1e-4,
             extrapolate: true,
+            consistent_tangent: false,
         }
     }
 }

@@ -112,6 +112,7 @@ fn particle_contact(
             mode: c.mode,
             penalty: c.penalty_factor * material.young / h,
             search_distance: h,
+            curvature_stiffness: settings.newton.consistent_tangent,
         },
     )
     .map_err(|e| SolverError::Unsupported(e.to_string()))?;
@@ -129,7 +130,7 @@ impl Simulation {
             material.creep_c,
             material.creep_n,
         )?;
-        let body = match &scene.tet_mesh {
+        let mut body = match &scene.tet_mesh {
             Some(t) => Body::new_tet10(t.nodes.clone(), t.elements.clone(), material)?,
             None => Body::new(
                 scene.mesh.nodes.clone(),
@@ -137,6 +138,13 @@ impl Simulation {
                 material,
             )?,
         };
+        if !settings.newton.consistent_tangent {
+            body.set_tangent_pressure_cap(
+                crate::newton::TANGENT_PRESSURE_CAP
+                    * settings.load.knockdown
+                    * settings.load.stress,
+            );
+        }
         let constraints = Constraints::new(
             scene.nodes(),
             scene.boundary_faces(),
@@ -447,14 +455,29 @@ impl Simulation {
         // Piston log-strain rate: the densification rate whatever the scene.
         let rate = ((lz + self.state.piston) / (lz + s.piston)).ln() / dt;
         let t1 = self.state.time + dt;
-        let weight = self
-            .settings
-            .load
-            .factor(t1)
-            .powf(self.body.material().creep_n);
+        let n = self.body.material().creep_n;
+        let (f0, f1) = (
+            self.settings.load.factor(self.state.time),
+            self.settings.load.factor(t1),
+        );
+        let weight = f1.powf(n);
+        // The change of ln rate the load alone makes (the ramp), for steps
+        // too short to measure the rate (see `step_control`).
+        let load_dln = if f0 > 0.0 && f1 > f0 {
+            n * (f1 / f0).ln()
+        } else {
+            0.0
+        };
         let max_dp = s.eval.body.max_dp();
         let noise = s.eval.contact.max_violation() / lz;
-        let assessment = self.control.assess(dt, rate, weight, max_dp, noise)?;
+        let assessment = self
+            .control
+            .assess(dt, rate, weight, load_dln, max_dp, noise)?;
+        if std::env::var_os("TIDENS_DEBUG").is_some() {
+            eprintln!(
+                "  accepted: rate {rate:.4e} /s, load weight {weight:.3e}, contact noise {noise:.2e}, {assessment:?}"
+            );
+        }
         self.stats.steps += 1;
         self.stats.newton_iterations += iterations;
         self.body.commit(&s.eval.body);
