@@ -199,6 +199,7 @@ def report(runs: dict[str, Any], refs: dict[str, Any], cases: list[str], element
                     + " | ".join(cells)
                     + f" | {100 * x['worst']:.2f} % | {'yes' if x['pareto'] else ('' if x['estimate'] is not None else '-')} |"
                 )
+    convergence(runs, refs, rows, cases, elements)
     n = sum(counts.values())
     print(
         f"\nestimates against true errors: {n} (run, density) pairs; {counts['in']} bracketed "
@@ -206,6 +207,46 @@ def report(runs: dict[str, Any], refs: dict[str, Any], cases: list[str], element
         f"{counts['under']} below it (each allowed the reference's uncertainty; runs at the reference's finest level not counted)"
     )
     return rows
+
+
+def convergence(runs: dict[str, Any], refs: dict[str, Any], rows: list[dict[str, Any]], cases: list[str], elements: list[str]) -> None:
+    """What the estimator's convergence model rests on, per element: the
+    signs of the changes along each three-level sequence of the study
+    (levels 1, 2, 3 at tolerances 4 tau, 2 tau, tau), and the share e/d of
+    the run-companion difference d that is the run's true error e, where e
+    stands clear of the reference's uncertainty (|e| > 2 u)."""
+    for element in elements:
+        alternating = monotone = 0
+        for case in cases:
+            for tol in sorted({r["tolerance"] for r in runs.values()}):
+                chain = [runs.get(key(case, element, lv, tol * COMPANION_TOLERANCE_FACTOR ** (3 - lv))) for lv in (3, 2, 1)]
+                if any(c is None for c in chain):
+                    continue
+                for m in MARKS:
+                    t = [td.result.interpolate_time(np.asarray(c["time_s"]), np.asarray(c["rel_density"]), m) for c in chain]
+                    if any(v is None for v in t) or f"{m:g}" not in refs[case]["times_s"]:
+                        continue
+                    if (t[0] - t[1]) * (t[1] - t[2]) < 0:
+                        alternating += 1
+                    else:
+                        monotone += 1
+        shares = []
+        for x in rows:
+            if x["element"] != element or x["case"] not in cases or x["estimate"] is None or x["level"] >= x["reference_level"]:
+                continue
+            below = companion_of(runs, {**x, "element": element})
+            assert below is not None
+            for k, e in x["true"].items():
+                if abs(e) <= 2 * x["unc"][k]:
+                    continue
+                tc = td.result.interpolate_time(np.asarray(below["time_s"]), np.asarray(below["rel_density"]), float(k))
+                ref = refs[x["case"]]["times_s"][k]
+                d = abs((ref * (1 + e) - tc) / (ref * (1 + e)))
+                shares.append((e / d if d > 0 else float("inf"), f"{x['case']} L{x['level']} tol {x['tolerance']:g} t({k})"))
+        print(f"\n{element}: the changes along the three-level sequences alternate in sign in {alternating} of {alternating + monotone}")
+        if shares:
+            print(f"{element}: |e|/d where the true error stands clear of the reference's uncertainty ({len(shares)} pairs): "
+                  + ", ".join(f"{abs(v):.2f} ({w})" for v, w in sorted(shares, key=lambda p: abs(p[0]))))
 
 
 def orders(ref: dict[str, Any], mark: str) -> str:

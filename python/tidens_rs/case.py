@@ -29,6 +29,9 @@ CHECKPOINT_INTERVAL = 50
 
 # The largest time tolerance the core accepts.
 MAX_TOLERANCE = 0.5
+# The statuses of a run that ended as asked (or at full density, before a
+# later target): its result is complete, and it gets an error estimate.
+FINISHED = ("reached_density", "reached_time", "full_density")
 # The range of Case.run(accuracy=...), and the ladder it climbs.
 MIN_ACCURACY, MAX_ACCURACY = 1e-3, 0.5
 LADDER_TOLERANCE_AT_LEVEL_3 = 0.01
@@ -386,7 +389,7 @@ class Case:
             sim=sim,
         )
         why: str | None = None
-        if error is not None or result.status not in ("reached_density", "reached_time"):
+        if error is not None or result.status not in FINISHED:
             why = f"the run ended with status {result.status}"
         elif not error_estimate:
             why = "not asked for (error_estimate=False)"
@@ -449,7 +452,7 @@ class Case:
                 callback=callback,
                 clear_outputs=clear_outputs and previous is None,
             )
-            done = error is not None or result.status not in ("reached_density", "reached_time")
+            done = error is not None or result.status not in FINISHED
             if done:
                 why = f"the run ended with status {result.status}"
                 result.error_estimate = rung._estimate(result, None, None, None, False, why)
@@ -670,7 +673,7 @@ def resume(
     )
     result.earlier_snapshots = earlier
     why: str | None = None
-    if error is not None or result.status not in ("reached_density", "reached_time"):
+    if error is not None or result.status not in FINISHED:
         why = f"the run ended with status {result.status}"
     elif not args["error_estimate"]:
         why = "not asked for (error_estimate=False)"
@@ -728,7 +731,7 @@ def _estimate_with(result: Result, companion: Result, error: BaseException | Non
     with ``error``, if any)."""
     level = result.case.solver.mesh_level
     arrays = {k: result.curve[k] for k in ESTIMATE_COLUMNS}
-    if error is not None or companion.status not in ("reached_density", "reached_time"):
+    if error is not None or companion.status not in FINISHED:
         note = f"the companion at mesh level {companion.case.solver.mesh_level} ended with status {companion.status}"
         if companion.message:
             note += f" ({companion.message})"

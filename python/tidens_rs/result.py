@@ -60,8 +60,9 @@ class Result:
     :data:`tidens_rs.io.CURVE_COLUMNS`); the most used ones are also
     attributes: ``time_s``, ``rel_density``, ``piston_displacement_mm``,
     ``applied_stress_mpa``. ``status`` is ``reached_density``,
-    ``reached_time``, ``stopped`` (by a callback), ``interrupted`` or
-    ``failed`` (then ``message`` says why). ``error_estimate`` is the
+    ``reached_time``, ``full_density`` (the pores closed, rho = 0.9999,
+    before the target: a long hold), ``stopped`` (by a callback),
+    ``interrupted`` or ``failed`` (then ``message`` says why). ``error_estimate`` is the
     estimated error of its times to density (see :mod:`tidens_rs.estimate`);
     ``accuracy_search`` the rungs a run with ``accuracy=`` climbed.
     """

@@ -72,6 +72,7 @@ fn pressed_octants() -> (Vec<f64>, ParticleContact) {
             penalty: 10.0 * YOUNG / h,
             search_distance: h,
             curvature_stiffness: true,
+            touch_stiffness_cap: f64::INFINITY,
         },
     )
     .expect("contact settings");

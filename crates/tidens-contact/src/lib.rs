@@ -48,8 +48,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// Fraction of the penalty stiffness that a slave node near a facet without
-/// pressure brings to the tangent while its pair of surfaces presses nowhere.
-const TOUCH_STIFFNESS: f64 = 1e-3;
+/// pressure brings to the tangent while its pair of surfaces presses nowhere
+/// (at most [`ContactSettings::touch_stiffness_cap`]).
+pub const TOUCH_STIFFNESS: f64 = 1e-3;
 
 /// Dofs of one contact term: a slave node and the four nodes of a facet.
 pub const TERM_DOFS: usize = 15;
@@ -83,6 +84,15 @@ pub struct ContactSettings {
     /// the linear-algebra time, with no indefinite factorisation (there were
     /// 15 to 35 %). Tied terms always have their consistent tangent.
     pub curvature_stiffness: bool,
+    /// Largest stiffness \[MPa/mm\] that a node near a facet without
+    /// pressure brings to the tangent ([`TOUCH_STIFFNESS`] of the penalty
+    /// otherwise), so that the load can close the gap in a Newton step: the
+    /// touch stiffness holds a body that hangs on a contact about to close,
+    /// but Newton moves the body by the force over it each iteration, and
+    /// where it scales with a stiff material's E (E/sigma = 1e7) a gap of
+    /// 4e-3 element sizes took hundreds of iterations to close (bcc during
+    /// the ramp: Newton stalled at any step length). Infinite: no cap.
+    pub touch_stiffness_cap: f64,
 }
 
 /// One slave node's link to a master facet, with its contribution.
@@ -501,7 +511,7 @@ impl ParticleContact {
         let stiffness = if pressure > 0.0 {
             eps
         } else {
-            TOUCH_STIFFNESS * eps
+            (TOUCH_STIFFNESS * eps).min(self.settings.touch_stiffness_cap)
         };
         let (kg, kh) = (area * stiffness, area * pressure);
         let tangent = match (with_tangent, hess) {

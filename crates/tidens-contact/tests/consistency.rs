@@ -116,6 +116,7 @@ fn tied_contact_tangent_equals_finite_differences_of_the_force() {
                 penalty: 100.0,
                 search_distance: 0.3,
                 curvature_stiffness: true,
+                touch_stiffness_cap: f64::INFINITY,
             },
         )
         .unwrap();
@@ -142,6 +143,7 @@ fn check_tangent(surfaces: Vec<ContactSurface>, nodes: &[[f64; 3]]) {
             penalty: 100.0,
             search_distance: 0.3,
             curvature_stiffness: true,
+            touch_stiffness_cap: f64::INFINITY,
         },
     )
     .unwrap();
@@ -205,6 +207,7 @@ fn the_tangent_without_curvature_is_semidefinite_and_what_it_leaves_out_is_not()
             penalty: 100.0,
             search_distance: 0.3,
             curvature_stiffness,
+            touch_stiffness_cap: f64::INFINITY,
         };
         let mut c = ParticleContact::new(surfaces, settings).unwrap();
         c.pair(&x);

@@ -53,6 +53,7 @@ pub(crate) fn status_name(status: Status) -> &'static str {
         Status::Running => "running",
         Status::ReachedDensity => "reached_density",
         Status::ReachedTime => "reached_time",
+        Status::FullDensity => "full_density",
     }
 }
 

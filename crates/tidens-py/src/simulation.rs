@@ -547,8 +547,9 @@ impl PySimulation {
     ///
     /// Each step runs with the GIL released; Ctrl-C raises KeyboardInterrupt
     /// between steps, leaving the state at the last converged step. Returns
-    /// the status: "running" (stopped by the callback), "reached_density" or
-    /// "reached_time". Raises ConvergenceError if a step fails.
+    /// the status: "running" (stopped by the callback), "reached_density",
+    /// "reached_time" or "full_density" (the pores closed: rho reached
+    /// 0.9999 first). Raises ConvergenceError if a step fails.
     #[pyo3(signature = (callback = None))]
     fn run(&self, py: Python<'_>, callback: Option<Bound<'_, PyAny>>) -> PyResult<&'static str> {
         while self.progress().status == Status::Running {
@@ -565,7 +566,7 @@ impl PySimulation {
         Ok(status_name(self.progress().status))
     }
 
-    /// "running", "reached_density" or "reached_time".
+    /// "running", "reached_density", "reached_time" or "full_density".
     #[getter]
     fn status(&self) -> &'static str {
         status_name(self.progress().status)

@@ -36,7 +36,7 @@ pub use checkpoint::Checkpoint;
 pub use error::{LinearError, SolverError, StepFailure};
 pub use load::LoadHistory;
 pub use load_path::TOUCH_TOLERANCE;
-pub use output::{CurvePoint, Fields, RunStats, Status};
+pub use output::{CurvePoint, FULL_DENSITY, Fields, RunStats, Status};
 pub use scene::{MAX_MESH_LEVEL, MeshOptions, Particle, Scene};
 pub use settings::{ContactOptions, NewtonSettings, Settings};
 pub use simulation::Simulation;

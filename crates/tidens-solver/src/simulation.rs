@@ -83,6 +83,11 @@ pub struct Simulation {
 /// Contact between the particles of `scene`, when it has more than one: the
 /// penalty is `penalty_factor * E / h` with `h` the mean edge of the
 /// surface quads, and the search reaches one such edge from a surface.
+/// The cap of the particle contacts' touch stiffness, in units of the
+/// stress the cell feels over the mean surface element size (f sigma / h)
+/// (`ContactSettings::touch_stiffness_cap`).
+const TOUCH_STIFFNESS_CAP: f64 = 50.0;
+
 fn particle_contact(
     scene: &Scene,
     material: &Material,
@@ -113,6 +118,13 @@ fn particle_contact(
             penalty: c.penalty_factor * material.young / h,
             search_distance: h,
             curvature_stiffness: settings.newton.consistent_tangent,
+            // The applied stress moves a node by a fiftieth of an element
+            // per Newton step against it; below the default touch stiffness
+            // (1e-3 of the penalty) for E/sigma > 5e3 (the base case: 4e3).
+            touch_stiffness_cap: TOUCH_STIFFNESS_CAP
+                * settings.load.knockdown
+                * settings.load.stress
+                / h,
         },
     )
     .map_err(|e| SolverError::Unsupported(e.to_string()))?;
@@ -315,6 +327,15 @@ impl Simulation {
         let rho = self.rel_density();
         if self.settings.until_density.is_some_and(|r| rho >= r) {
             self.status = Status::ReachedDensity;
+        } else if rho >= crate::output::FULL_DENSITY
+            && self
+                .curve
+                .first()
+                .is_some_and(|p| p.rel_density < crate::output::FULL_DENSITY)
+        {
+            // A packing whose pores have closed (not a block that was dense
+            // from the start).
+            self.status = Status::FullDensity;
         } else if self
             .settings
             .until_time
