@@ -219,12 +219,14 @@ def convergence(runs: dict[str, Any], refs: dict[str, Any], rows: list[dict[str,
         alternating = monotone = 0
         for case in cases:
             for tol in sorted({r["tolerance"] for r in runs.values()}):
-                chain = [runs.get(key(case, element, lv, tol * COMPANION_TOLERANCE_FACTOR ** (3 - lv))) for lv in (3, 2, 1)]
-                if any(c is None for c in chain):
+                found = [runs.get(key(case, element, lv, tol * COMPANION_TOLERANCE_FACTOR ** (3 - lv))) for lv in (3, 2, 1)]
+                chain = [c for c in found if c is not None]
+                if len(chain) < 3:
                     continue
                 for m in MARKS:
-                    t = [td.result.interpolate_time(np.asarray(c["time_s"]), np.asarray(c["rel_density"]), m) for c in chain]
-                    if any(v is None for v in t) or f"{m:g}" not in refs[case]["times_s"]:
+                    at = [td.result.interpolate_time(np.asarray(c["time_s"]), np.asarray(c["rel_density"]), m) for c in chain]
+                    t = [v for v in at if v is not None]
+                    if len(t) < 3 or f"{m:g}" not in refs[case]["times_s"]:
                         continue
                     if (t[0] - t[1]) * (t[1] - t[2]) < 0:
                         alternating += 1
