@@ -92,9 +92,7 @@ def estimate_of(runs: dict[str, Any], r: dict[str, Any]) -> ErrorEstimate | None
         return None
     _, _, until = CASES[r["case"]]
     marks = [x for x in MARKS if x <= until]
-    return estimate_error(
-        as_result_arrays(r), as_result_arrays(below), marks, level=r["level"], companion_level=r["level"] - 1, element=r["element"]
-    )
+    return estimate_error(as_result_arrays(r), as_result_arrays(below), marks, level=r["level"], companion_level=r["level"] - 1)
 
 
 def main(argv: list[str] | None = None) -> None:

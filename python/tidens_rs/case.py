@@ -742,7 +742,6 @@ def _estimate_with(result: Result, companion: Result, error: BaseException | Non
         MARK_DENSITIES,
         level=level,
         companion_level=companion.case.solver.mesh_level,
-        element=result.case.solver.element,
         companion_wall_seconds=companion.wall_seconds,
     )
 

@@ -6,32 +6,24 @@ The total comes from a coarse companion: the same case one mesh level down
 together. With element sizes h (the run) and H (the companion), both errors
 shrink by about (H/h)^2 from the companion to the run (the mesh error goes
 as h^2; the time error as the tolerance, which halves, and (H/h)^2 is 1.8
-to 2.3 between levels). How the difference d = |t_run - t_companion| / t_run
-splits between the two levels depends on how the element converges, which
-the accuracy study measured (README, "How far from converged"):
-
-hex8, alternating
-    Its times to density move up and down from level to level (nodes meet
-    the planes and the other particles one at a time, and whether a level
-    is early or late at a density is the phase of those events): the signs
-    of the changes alternated in 13 of the 17 three-level sequences of the
-    study, and where they did not, the observed order was near 4. With
-    errors of alternating sign that shrink by rho = (h/H)^2 a level, the
-    converged time lies between the two runs and the run's error is
-    g d with g = h^2 / (H^2 + h^2) (0.31 from level 1 to 2, 0.36 from 2 to
-    3, 0.35 from 3 to 4); the study measured 0.09 to 0.32 wherever the true
-    error stands clear of the reference's own uncertainty. No extrapolated
-    time is given: neither this model's nor the monotone one's moved the
-    times closer to the references.
-tet10, monotone
-    The quadratic tetrahedra converge from one side (from below: faster
-    densification on coarse meshes, on sc, bcc and sc2): Richardson's
-    g = h^2 / (H^2 - h^2) (0.8, 1.29, 1.12) and the extrapolated time
-    t_run + g (t_run - t_companion).
-
-Mesh convergence on contact cells is not smooth, and the two curves can
-cross at a density by chance: d is taken as its root mean square over
+to 2.3 between levels), and Richardson's estimate of the run's relative
+error of t(rho) is g |t_run - t_companion| / t_run with g = h^2/(H^2 - h^2).
+Mesh convergence on contact cells is not monotone (nodes meet the planes
+and facets one at a time, so the two curves can cross at a density by
+chance): the difference is taken as its root mean square over
 rho +- 0.01.
+
+The h^2 factor assumes the errors keep their sign. On hexahedra they often
+alternate from level to level (whether a level is early or late at a
+density is the phase of the contact events), and then the true error is
+the smaller share h^2 / (H^2 + h^2) of the difference; but where they keep
+their sign (sc at rho = 0.8 and 0.95, bcc at 0.8, the quadratic
+tetrahedra) that share falls short by 2 to 3 times, and no one factor fits
+every cell and density of the accuracy study (``benches/accuracy.py``
+prints the sign statistics and the measured shares). The estimate keeps the
+conservative factor: on the hexahedra of the study it was never below the
+true error, and up to 10 times above it on bcc at rho = 0.9 and 0.95 from
+a level-1 companion, which is far from converged there.
 
 Parts, each a non-negative relative error:
 
@@ -49,6 +41,8 @@ time
     tolerance alone cannot gain more than this.
 
 The curve as a whole gets the largest of each over the reported densities.
+``extrapolated_s`` is the Richardson value t_run + g (t_run - t_companion)
+at each density.
 """
 
 from __future__ import annotations
@@ -64,9 +58,6 @@ from ._core import LEVEL_DIVISIONS
 
 # Order assumed for the Richardson factor of the mesh part.
 MESH_ORDER = 2.0
-# How each element's times to density converge with the mesh level (see the
-# module docstring): "alternating" or "monotone".
-CONVERGENCE: dict[str, str] = {"hex8": "alternating", "tet10": "monotone"}
 # Half-width in rho of the window over which the level difference is taken.
 DENSITY_WINDOW = 0.01
 # The companion's time tolerance over the run's.
@@ -84,8 +75,7 @@ class ErrorEstimate:
     ``mesh`` the same number (the companion refines mesh and tolerance
     together), ``time`` the step controller's bound on the time part alone,
     ``curve`` the largest of each over the reported densities,
-    ``extrapolated_s`` the Richardson extrapolation of each t(rho) (for an
-    element that converges from one side; empty for hex8), and
+    ``extrapolated_s`` the Richardson extrapolation of each t(rho), and
     ``method`` says how each was obtained (see :mod:`tidens_rs.estimate`).
     """
 
@@ -111,20 +101,13 @@ class ErrorEstimate:
         }
 
 
-def richardson_factor(level: int, coarse_level: int, order: float | None = None, convergence: str = "monotone") -> float:
-    """The share g of the relative difference of the two levels' times that
-    is the finer run's error, for the element sizes h and H of the levels
-    (p: ``order``, default :data:`MESH_ORDER`): h^p / (H^p - h^p) when the
-    errors keep their sign (``convergence="monotone"``), h^p / (H^p + h^p)
-    when they alternate (``"alternating"``)."""
+def richardson_factor(level: int, coarse_level: int, order: float | None = None) -> float:
+    """g = h^p / (H^p - h^p) for the element sizes of the two levels (p:
+    ``order``, default :data:`MESH_ORDER`)."""
     order = MESH_ORDER if order is None else order
-    h = (1.0 / LEVEL_DIVISIONS[level]) ** order
-    big = (1.0 / LEVEL_DIVISIONS[coarse_level]) ** order
-    if convergence == "monotone":
-        return float(h / (big - h))
-    if convergence == "alternating":
-        return float(h / (big + h))
-    raise ValueError(f"convergence = {convergence!r}: must be 'monotone' or 'alternating'")
+    h = 1.0 / LEVEL_DIVISIONS[level]
+    big = 1.0 / LEVEL_DIVISIONS[coarse_level]
+    return float(h**order / (big**order - h**order))
 
 
 def _time_at(time_s: np.ndarray, rho: np.ndarray, target: np.ndarray) -> np.ndarray:
@@ -142,7 +125,6 @@ def estimate_error(
     *,
     level: int | None = None,
     companion_level: int | None = None,
-    element: str = "hex8",
     companion_wall_seconds: float | None = None,
     companion_note: str | None = None,
 ) -> ErrorEstimate:
@@ -151,12 +133,9 @@ def estimate_error(
     ``curve`` and ``companion`` hold ``time_s``, ``rel_density`` and (the
     run's) ``time_error_s`` arrays; ``companion`` is the coarse run (None:
     no mesh part, ``companion_note`` says why). ``level`` and
-    ``companion_level`` (default: consecutive levels 3 and 2) and the
-    ``element``'s convergence (:data:`CONVERGENCE`) set the Richardson factor.
+    ``companion_level`` set the Richardson factor (default: consecutive
+    levels 3 and 2).
     """
-    if element not in CONVERGENCE:
-        raise ValueError(f"element = {element!r}: must be one of {sorted(CONVERGENCE)}")
-    convergence = CONVERGENCE[element]
     t, rho = np.asarray(curve["time_s"], float), np.asarray(curve["rel_density"], float)
     terr = np.asarray(curve["time_error_s"], float)
     reached = [m for m in marks if rho[-1] >= m > rho[0]]
@@ -174,7 +153,7 @@ def estimate_error(
     else:
         lv = level if level is not None else 3
         lc = companion_level if companion_level is not None else lv - 1
-        g = richardson_factor(lv, lc, convergence=convergence)
+        g = richardson_factor(lv, lc)
         tc, rc = np.asarray(companion["time_s"], float), np.asarray(companion["rel_density"], float)
         lo, hi = max(rho[0], rc[0]), min(rho[-1], rc[-1])
         for k, m in zip(keys, reached):
@@ -186,17 +165,13 @@ def estimate_error(
             ok = fine > 0
             diff = float(np.sqrt(np.mean(((fine[ok] - coarse[ok]) / fine[ok]) ** 2))) if ok.any() else 0.0
             mesh[k] = g * diff
-            if convergence == "monotone":
-                tc_m = float(_time_at(tc, rc, np.array([m]))[0])
-                extrapolated[k] = times[k] + g * (times[k] - tc_m)
-        signs = "errors of alternating sign" if convergence == "alternating" else "errors of one sign"
+            tc_m = float(_time_at(tc, rc, np.array([m]))[0])
+            extrapolated[k] = times[k] + g * (times[k] - tc_m)
         method["mesh"] = (
             f"Richardson from a companion run at mesh level {lc} and {COMPANION_TOLERANCE_FACTOR:g} times the "
-            f"tolerance (this run: level {lv}), {element}: {signs} of order {MESH_ORDER:g} in the element size "
+            f"tolerance (this run: level {lv}), order {MESH_ORDER:g} in the element size assumed "
             f"(factor {g:.3g}), the difference taken as its root mean square over rho +-{DENSITY_WINDOW:g}"
         )
-        if convergence == "alternating":
-            method["mesh"] += "; no extrapolated times (the converged time lies between the two runs)"
         if any(v is None for v in mesh.values()):
             method["mesh"] += "; None where the companion did not reach the density"
     # The companion refines mesh and tolerance together: its estimate is the total.
