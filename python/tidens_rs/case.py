@@ -87,7 +87,10 @@ class SolverSettings:
         residual as a fraction of the applied piston force.
     contact_penalty_factor
         Penalty stiffness of particle-particle contact as a multiple of E/h,
-        h the mean surface element size, in [0.01, 1e4]. The augmented
+        h the mean surface element size, in [0.01, 1e4], at most
+        1e6 f sigma / h (reached on stiff materials, E/sigma above 1e5,
+        where a penalty scaling with E makes the contact state flip on
+        displacements far below what the load moves). The augmented
         Lagrangian iterates the contact pressures until the penetration is
         below ``penetration_tolerance``, so the factor changes the cost of a
         step, not its result.

@@ -52,8 +52,9 @@ pub struct ContactOptions {
     /// rigid plane of the die (no tangential sliding on the wall).
     pub tied_planes: bool,
     /// Penalty stiffness as a multiple of E / h, h the mean surface element
-    /// size (default 10); the augmented Lagrangian removes its effect on the
-    /// result down to the penetration tolerance.
+    /// size (default 10), at most 1e6 f sigma / h (which a stiff material,
+    /// E/sigma above 1e5, reaches); the augmented Lagrangian removes its
+    /// effect on the result down to the penetration tolerance.
     pub penalty_factor: f64,
     /// Largest penetration allowed in a converged step, as a fraction of the
     /// largest particle radius R (default 1e-4 as required; solved to 0.5e-4).
