@@ -80,9 +80,9 @@ pub struct ContactSettings {
     /// each term's tangent is positive semi-definite, Newton converges
     /// linearly near the contact edge instead of quadratically, but every
     /// iteration's direction is one of descent: on the bcc and fcc cells at
-    /// level 2 the runs take 30 to 35 % fewer Newton iterations and half
-    /// the linear-algebra time, with no indefinite factorisation (there were
-    /// 15 to 35 %). Tied terms always have their consistent tangent.
+    /// level 2 the runs take 29 and 34 % fewer Newton iterations and 43 and
+    /// 50 % less linear-algebra time, with no indefinite factorisation
+    /// (there were 14 and 36 %). Tied terms always have their consistent tangent.
     pub curvature_stiffness: bool,
     /// Largest stiffness \[MPa/mm\] that a node near a facet without
     /// pressure brings to the tangent ([`TOUCH_STIFFNESS`] of the penalty
