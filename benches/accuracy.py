@@ -6,6 +6,8 @@ and how each run's own error estimate compares with its true error.
                                [--levels 2 3] [--tolerances 0.02 0.01]
                                [--out benches/accuracy.json] [--plot accuracy.png]
                                [--report-only]
+    python benches/accuracy.py --pointwise [--cases sc bcc] [--ladder-levels 1 2 3 4 5]
+                               [--plot-pointwise errors.png]
 
 Every run is a default run but for its level, tolerance and element (Ti-6Al-4V
 at 1293 K, the cases of ``speed_cases.py``); each run studied (``--levels``
@@ -19,6 +21,21 @@ the output file as they finish, with their curves, and are not repeated:
 the command can be stopped and resumed, and ``--report-only`` reprints the
 tables from the file (the estimates are recomputed from the stored curves,
 so a change of the estimator needs no new runs).
+
+``--pointwise`` looks at every density instead of three: per case a mesh
+ladder at tolerance 0.005 (``--ladder-levels``, stored with its curves under
+``ladders`` in the output file), the finest level taken as the truth. For
+each level below it, over the densities from rho0 + 0.04 to the end, it
+prints the root mean square of the true relative error of t(rho), how often
+the run's estimate (from the level below as its companion) brackets it
+(est/3 <= |true| <= est), falls below it or is more than 3 times above it,
+the median and largest ratio of the true error to the estimate, and the
+ceiling of any estimate that knows the error's distribution near a
+density but not its phase (for each density, the best share of the true
+errors within rho +- 0.025 that one number brackets). On the contact cells
+the error of t(rho) oscillates about the converged curve, one swing per
+ring of nodes meeting a plane or a facet, so its sign and size at one
+density are a matter of phase; ``--plot-pointwise`` draws the errors.
 
 The tables: per case, the observed mesh and time orders of its reference
 ladders; per run, wall time, cost with the companion, true error per
@@ -50,6 +67,11 @@ from tidens_rs.estimate import COMPANION_TOLERANCE_FACTOR, ErrorEstimate, estima
 HERE = Path(__file__).resolve().parent
 # Levels of the runs studied (each also runs its companion one level down).
 ELEMENT_LEVELS = {"hex8": (2, 3), "tet10": (2,)}
+# The pointwise study: the ladders' tolerance, the density grid, and the
+# half-width of the window whose error distribution the ceiling knows.
+LADDER_TOLERANCE = 0.005
+POINTWISE_SAMPLES = 1201
+CEILING_WINDOW = 0.025
 
 
 def key(case: str, element: str, level: int, tol: float) -> str:
@@ -105,10 +127,27 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--references", type=Path, default=HERE / "references.json")
     ap.add_argument("--plot", type=Path, help="error against cost, one panel per case")
     ap.add_argument("--report-only", action="store_true", help="no new runs: tables from the stored ones")
+    ap.add_argument("--pointwise", action="store_true", help="the estimate at every density against a mesh ladder's finest curve")
+    ap.add_argument("--ladder-levels", type=int, nargs="+", default=[1, 2, 3, 4, 5], help="levels of the pointwise ladders")
+    ap.add_argument("--plot-pointwise", type=Path, help="the pointwise true errors, one panel per case")
     args = ap.parse_args(argv)
     data: dict[str, Any] = json.loads(args.out.read_text()) if args.out.exists() else {}
     runs: dict[str, Any] = data.setdefault("runs", {})
     refs = json.loads(args.references.read_text())["cases"]
+
+    if args.pointwise:
+        ladders: dict[str, Any] = data.setdefault("ladders", {})
+        cases = args.cases if args.cases != list(CASES) else ["sc", "bcc"]
+        for case in cases:
+            for level in args.ladder_levels:
+                k = key(case, "hex8", level, LADDER_TOLERANCE)
+                if k in ladders or args.report_only:
+                    continue
+                print(f"# ladder run {k}", file=sys.stderr, flush=True)
+                ladders[k] = run(case, "hex8", level, LADDER_TOLERANCE)
+                args.out.write_text(json.dumps(data) + "\n")
+        pointwise(ladders, cases, args.plot_pointwise)
+        return
 
     if not args.report_only:
         for case in args.cases:
@@ -214,7 +253,8 @@ def convergence(runs: dict[str, Any], refs: dict[str, Any], rows: list[dict[str,
     the run-companion difference d (as the estimate takes it: its root mean
     square over the density window) that is the run's true error e, where e
     stands clear of the reference's uncertainty (|e| > 2 u). The estimate
-    assumes h^2 / (H^2 - h^2): 0.8 at level 2, 1.29 at level 3."""
+    takes h^p / (H^p - h^p) with p = ``MESH_ORDER`` (1.5: 1.20 at level 2,
+    1.85 at level 3)."""
     for element in elements:
         alternating = monotone = 0
         for case in cases:
@@ -248,6 +288,80 @@ def convergence(runs: dict[str, Any], refs: dict[str, Any], rows: list[dict[str,
         if shares:
             print(f"{element}: |e|/d where the true error stands clear of the reference's uncertainty ({len(shares)} pairs): "
                   + ", ".join(f"{abs(v):.2f} ({w})" for v, w in sorted(shares, key=lambda p: abs(p[0]))))
+
+
+def pointwise(ladders: dict[str, Any], cases: list[str], plot_path: Path | None) -> None:
+    """The estimate at every density of each ladder level against the
+    ladder's finest curve (see the module docstring)."""
+    panels = []
+    print(
+        f"\npointwise, against each ladder's finest level (tolerance {LADDER_TOLERANCE:g}; densities from rho0 + 0.04 to the end; "
+        f"estimate: the run's own, from the level below; ceiling: the best any estimate can do that knows the error's "
+        f"distribution within rho +-{CEILING_WINDOW:g} but not its phase)"
+    )
+    print("| case | level | truth | rms true error | bracketed | below | over 3x | true/est median, largest | ceiling |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for case in cases:
+        levels = sorted(r["level"] for r in ladders.values() if r["case"] == case)
+        if len(levels) < 3:
+            continue
+        top = levels[-1]
+        curves = {lv: ladders[key(case, "hex8", lv, LADDER_TOLERANCE)] for lv in levels}
+        lo = max(c["rel_density"][0] for c in curves.values()) + 0.04
+        hi = min(c["rel_density"][-1] for c in curves.values())
+        grid = np.linspace(lo, hi, POINTWISE_SAMPLES)
+        step = grid[1] - grid[0]
+        truth = _times(curves[top], grid)
+        errors = {}
+        for lv in levels[1:-1]:
+            t = _times(curves[lv], grid)
+            true = np.abs(t - truth) / truth
+            errors[lv] = (t - truth) / truth
+            est = estimate_error(as_result_arrays(curves[lv]), as_result_arrays(curves[lv - 1]), list(grid), level=lv, companion_level=lv - 1)
+            e = np.array([est.relative[f"{m:g}"] or np.nan for m in grid])
+            ok = np.isfinite(e)
+            inside = np.mean((true[ok] >= e[ok] / 3) & (true[ok] <= e[ok]))
+            below = np.mean(true[ok] > e[ok])
+            over = np.mean(true[ok] < e[ok] / 3)
+            ratio = true[ok] / e[ok]
+            half = int(round(CEILING_WINDOW / step))
+            best = []
+            for i in range(len(grid)):
+                near = true[max(0, i - half) : i + half + 1]
+                candidates = np.quantile(near, np.linspace(0.05, 1.0, 40))
+                best.append(max(float(np.mean((near >= x / 3) & (near <= x))) for x in candidates))
+            print(
+                f"| {case} | {lv} | level {top}{' (one up)' if top - lv == 1 else ''} | {100 * np.sqrt(np.mean(errors[lv] ** 2)):.2f} % | "
+                f"{100 * inside:.0f} % | {100 * below:.0f} % | {100 * over:.0f} % | {np.median(ratio):.2f}, {ratio.max():.2f} | {100 * np.mean(best):.0f} % |"
+            )
+        panels.append((case, top, grid, errors))
+    if plot_path is None or not panels:
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(panels), figsize=(5.5 * len(panels), 3.8), squeeze=False)
+    for ax, (case, top, grid, errors) in zip(axes.flat, panels):
+        for lv, e in errors.items():
+            ax.plot(grid, 100 * e, lw=1.0, label=f"level {lv}")
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set_ylim(-12, 12)
+        ax.set_title(f"{case}: t(rho) against level {top}")
+        ax.set_xlabel("relative density")
+        ax.set_ylabel("relative error of t(rho) [%]")
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(plot_path, dpi=110)
+    print(f"wrote {plot_path}")
+
+
+def _times(r: dict[str, Any], grid: np.ndarray) -> np.ndarray:
+    """t(rho) of a stored run on a density grid (first arrival, linear between steps)."""
+    rho = np.asarray(r["rel_density"], float)
+    keep = np.concatenate([[True], np.diff(rho) > 0])
+    return np.asarray(np.interp(grid, rho[keep], np.asarray(r["time_s"], float)[keep]))
 
 
 def orders(ref: dict[str, Any], mark: str) -> str:

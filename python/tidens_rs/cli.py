@@ -126,7 +126,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--until-density", type=float, help="stop at this relative density")
     g.add_argument("--until-time", type=float, help="stop at this time [s]")
     g = p.add_argument_group("numerics")
-    g.add_argument("--accuracy", type=float, help="ask for an accuracy instead of a mesh: the relative error of t(rho) wanted, in [0.001, 0.5]; climbs mesh levels 1, 2, 3, ... (tolerance 0.04, 0.02, 0.01, ...) until the estimated error is within it (excludes --mesh-level and --tolerance)")
+    g.add_argument("--accuracy", type=float, help="ask for an accuracy instead of a mesh: the relative error of t(rho) wanted, in [0.001, 0.5]; climbs mesh levels 1, 2, 3, ... (tolerance 0.08, 0.04, 0.02, ...) until the estimated error is within it (excludes --mesh-level and --tolerance)")
     g.add_argument("--mesh-level", type=int, help=f"mesh level, 1 (coarsest) to 6; each level refines the elements by about sqrt(2) (default {DEFAULT_MESH_LEVEL})")
     g.add_argument("--tolerance", type=float, help=f"time-integration accuracy, relative error of t(rho) (default {DEFAULT_TOLERANCE:g})")
     g.add_argument("--grading", type=float, default=_DEFAULTS.grading, help=f"element-size ratio toward the contact points (default {_DEFAULTS.grading:g})")

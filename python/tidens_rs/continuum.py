@@ -76,7 +76,15 @@ class ContinuumModel:
         return self.knockdown * self.stress_mpa
 
     def rate(self, rho: npt.ArrayLike) -> FloatArray:
-        """Densification rate at full load [1/s], Eqs. 2 (rho < 0.9) and 3 of the paper."""
+        """Densification rate at full load [1/s], Eqs. 2 (rho < 0.9) and 3 of
+        the paper; ``inf`` where it exceeds the largest float (rho0, or n
+        near 50 at a high stress)."""
+        with np.errstate(over="ignore"):
+            return np.exp(self.log_rate(rho))
+
+    def log_rate(self, rho: npt.ArrayLike) -> FloatArray:
+        """Natural log of :meth:`rate`, evaluated as a sum of logs so that no
+        power overflows for any n the core accepts (``+inf`` at rho0)."""
         r = np.asarray(rho, dtype=float)
         c, n, s, r0 = self.creep_c, self.creep_n, self.cell_stress_mpa, self.rho0
         out = np.empty_like(r)
@@ -84,13 +92,13 @@ class ContinuumModel:
         x = np.maximum(r[ini] - r0, 0.0)
         with np.errstate(divide="ignore"):
             out[ini] = (
-                3.06 * c * ((1.0 - r0) / x) ** (n - 0.5) * r0 ** (1.0 / 3.0)
-                / r[ini] ** (2.0 * n - 2.0 / 3.0) * (B_INITIAL * s / 3.0) ** n
+                np.log(3.06 * c) + (n - 0.5) * (np.log(1.0 - r0) - np.log(x)) + np.log(r0) / 3.0
+                - (2.0 * n - 2.0 / 3.0) * np.log(r[ini]) + n * np.log(B_INITIAL * s / 3.0)
             )
         rf = r[~ini]
         out[~ini] = (
-            1.5 * c * rf * (1.0 - rf) / (1.0 - (1.0 - rf) ** (1.0 / n)) ** n
-            * (3.0 * B_FINAL * s / (2.0 * n)) ** n
+            np.log(1.5 * c) + np.log(rf) + np.log1p(-rf) - n * np.log(-np.expm1(np.log1p(-rf) / n))
+            + n * np.log(3.0 * B_FINAL * s / (2.0 * n))
         )
         return out
 
@@ -107,16 +115,22 @@ class ContinuumModel:
             first = min(target, STAGE_SWITCH)
             span = first - self.rho0
             rr = self.rho0 + span * u**2
-            t = float(np.sum(w * 2.0 * span * u / self.rate(rr)))
+            t = float(np.sum(w * 2.0 * span * u * self._slowness(rr)))
             if target > STAGE_SWITCH:
                 # Final stage: 1/rate ~ 1/(1 - rho) near full density; map
                 # rho = 1 - (1 - 0.9) ((1 - target)/(1 - 0.9))^u.
                 a, b = 1.0 - STAGE_SWITCH, 1.0 - target
                 rr = 1.0 - a * (b / a) ** u
                 drdu = -(1.0 - rr) * np.log(b / a)
-                t += float(np.sum(w * drdu / self.rate(rr)))
+                t += float(np.sum(w * drdu * self._slowness(rr)))
             out[k] = t
         return out
+
+    def _slowness(self, rho: FloatArray) -> FloatArray:
+        """1 / rate [s], from the log of the rate (0 at rho0; ``inf`` only
+        where the time itself passes the largest float)."""
+        with np.errstate(over="ignore"):
+            return np.exp(-self.log_rate(rho))
 
     def time_from_effective(self, t_eff: npt.ArrayLike) -> FloatArray:
         """Real time [s] for an effective time [s], inverting the ramp."""
@@ -125,11 +139,10 @@ class ContinuumModel:
         if tr <= 0:
             return te.copy()
         in_ramp = te < tr / (n + 1.0)
-        return np.where(
-            in_ramp,
-            ((n + 1.0) * tr**n * np.maximum(te, 0.0)) ** (1.0 / (n + 1.0)),
-            te + n * tr / (n + 1.0),
-        )
+        # Within the ramp t = ((n + 1) tr^n t_eff)^(1/(n+1)), in logs (tr^n overflows for large n).
+        with np.errstate(divide="ignore"):
+            log_t = (np.log(n + 1.0) + n * np.log(tr) + np.log(np.maximum(te, 0.0))) / (n + 1.0)
+        return np.where(in_ramp, np.exp(log_t), te + n * tr / (n + 1.0))
 
     def time_to_density(self, rho: npt.ArrayLike) -> FloatArray:
         """Time [s] to reach each density under the ramp and hold."""

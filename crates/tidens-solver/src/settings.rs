@@ -81,7 +81,7 @@ pub struct Settings {
     /// Stop at this time \[s\].
     pub until_time: Option<f64>,
     /// Time-integration accuracy: the target relative error of the times
-    /// t(rho) from the backward-Euler steps (default 0.01). Each step's error
+    /// t(rho) from the backward-Euler steps (default 0.02). Each step's error
     /// estimate, half the step times the change of the log of the
     /// densification rate over it, weighted by the load factor to the n, is
     /// held below `tolerance` times the step (the change measured over the
@@ -129,7 +129,7 @@ impl Settings {
             load,
             until_density: None,
             until_time: None,
-            tolerance: 0.01,
+            tolerance: 0.02,
             max_strain_increment: 0.2,
             dt_initial: None,
             dt_max: f64::INFINITY,
