@@ -352,9 +352,7 @@ def pointwise(ladders: dict[str, Any], cases: list[str], plot_path: Path | None)
         ax.set_xlabel("relative density")
         ax.set_ylabel("relative error of t(rho) [%]")
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(plot_path, dpi=110)
-    print(f"wrote {plot_path}")
+    _save(fig, plot_path)
 
 
 def _times(r: dict[str, Any], grid: np.ndarray) -> np.ndarray:
@@ -420,6 +418,10 @@ def plot(rows: list[dict[str, Any]], path: Path) -> None:
         ax.set_xlabel("wall time with the companion [s]")
         ax.set_ylabel("largest error of t(rho) [%]")
         ax.legend(fontsize=6)
+    _save(fig, path)
+
+
+def _save(fig: Any, path: Path) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     print(f"wrote {path}")
