@@ -52,6 +52,10 @@ use serde::{Deserialize, Serialize};
 /// (at most [`ContactSettings::touch_stiffness_cap`]).
 pub const TOUCH_STIFFNESS: f64 = 1e-3;
 
+/// A paired node keeps its facet from step to step while its projection
+/// stays within the facet grown by this factor (see [`ParticleContact::pair`]).
+const KEEP_FACET_MARGIN: f64 = 1.1;
+
 /// Dofs of one contact term: a slave node and the four nodes of a facet.
 pub const TERM_DOFS: usize = 15;
 
@@ -339,7 +343,7 @@ impl ParticleContact {
             let p = point(x, self.surfaces[s].nodes[k]);
             let q = self.surfaces[m].facets[f].map(|n| point(x, n));
             let xi = facet::project_on(kind, &p, &q);
-            let inside = facet::outside(kind, xi) <= 1.1;
+            let inside = facet::outside(kind, xi) <= KEEP_FACET_MARGIN;
             let near = facet::penetration_on(kind, &p, &q, xi) > -self.settings.search_distance;
             inside && near
         };

@@ -94,6 +94,65 @@ fn max_abs(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |m, x| m.max(x.abs()))
 }
 
+/// Prints the pressed contact links that appeared or went since the last
+/// call (debugging output, `TIDENS_DEBUG`).
+fn debug_link_changes(
+    prev: &mut Vec<(ContactLink, f64, f64, [f64; 2])>,
+    contact: &ContactEvaluation,
+) {
+    let now: Vec<(ContactLink, f64, f64, [f64; 2])> = contact
+        .terms
+        .iter()
+        .filter(|t| t.pressure > 0.0)
+        .map(|t| {
+            (
+                ContactLink {
+                    slave: t.slave,
+                    master: t.master,
+                },
+                t.pressure,
+                t.penetration,
+                t.location,
+            )
+        })
+        .collect();
+    let all: Vec<(ContactLink, f64, f64, [f64; 2])> = contact
+        .terms
+        .iter()
+        .map(|t| {
+            (
+                ContactLink {
+                    slave: t.slave,
+                    master: t.master,
+                },
+                t.pressure,
+                t.penetration,
+                t.location,
+            )
+        })
+        .collect();
+    for n in &now {
+        if !prev.iter().any(|p| p.0 == n.0) {
+            eprintln!(
+                "      + pressed {:?} p {:.3e} pen {:.3e} xi {:?}",
+                n.0, n.1, n.2, n.3
+            );
+        }
+    }
+    for p in prev.iter() {
+        if !now.iter().any(|n| n.0 == p.0) {
+            let there = all.iter().find(|a| a.0.slave == p.0.slave);
+            eprintln!(
+                "      - released {:?} (was p {:.3e}) now {:?}",
+                p.0,
+                p.1,
+                there.map(|a| (a.0.master, a.1, a.2, a.3))
+            );
+        }
+    }
+    *prev = now;
+}
+
 fn debug_enabled() -> bool {
     std::env::var_os("TIDENS_DEBUG").is_some()
 }
@@ -207,6 +266,7 @@ impl Simulation {
         let mut iterations = 0;
         let mut active_set_updates = 0;
         let mut augmentations = 0;
+        let mut debug_pressed: Vec<(ContactLink, f64, f64, [f64; 2])> = Vec::new();
         loop {
             let mut map = self.constraints.equation_map();
             let mut r = self.residual(&eval.f_int, &map, force);
@@ -233,6 +293,7 @@ impl Simulation {
             let offsets = self.constraints.offsets(&u, piston);
             let r_norm = max_abs(&r);
             if debug_enabled() {
+                debug_link_changes(&mut debug_pressed, &eval.contact);
                 eprintln!(
                     "    it {iterations} |R| {r_norm:.3e} tol {tol:.3e} refactor {refactor} planes {:?} particle contacts {} penetration {:.2e}",
                     self.constraints.contact_counts(),
