@@ -1,11 +1,15 @@
 """The continuum model (docs/model.md section 8) against properties it must have."""
 
+import csv
 import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+import tidens_rs as td
+from tidens_rs.cli import main
 from tidens_rs.continuum import ContinuumModel
 
 RHO0 = math.pi / 6
@@ -92,3 +96,68 @@ def test_large_exponents_raise_no_overflow(c: float) -> None:
         rates = m.rate([0.6, 0.95])
     assert np.all(np.isfinite(t)) and np.all(np.diff(t) > 0)
     assert np.all(rates > 0)
+
+
+@pytest.mark.parametrize("n", [1.0, 2.8, 4.3])
+def test_times_equal_an_independent_quadrature(n: float) -> None:
+    # The trapezoidal rule on 400001 points, graded toward the ends where
+    # 1/rate varies fastest (rho0, where it vanishes as (rho - rho0)^(n - 1/2),
+    # and rho -> 1, where it grows as 1/(1 - rho)), against the model's
+    # Gauss-Legendre quadrature with its own substitutions.
+    m = model(creep_n=n, creep_c=1e-4 / 10**n)
+    for target in (0.6, 0.85, 0.9, 0.95, 0.99):
+        v = np.linspace(0.0, 1.0, 400001)
+        first = min(target, 0.9)
+        # The initial stage's formula up to its end (it switches at 0.9 itself).
+        rho = np.minimum(RHO0 + (first - RHO0) * v**3, np.nextafter(0.9, 0.0))
+        t = np.trapezoid(1.0 / m.rate(rho[1:]), rho[1:])
+        if target > 0.9:
+            gap = np.geomspace(0.1, 1.0 - target, 400001)
+            rho = 1.0 - gap
+            t += np.trapezoid(1.0 / m.rate(rho), rho)
+        assert float(m.effective_time(target)[0]) == pytest.approx(t, rel=1e-6)
+
+
+def test_the_command_writes_the_curve_of_the_model(tmp_path: Path) -> None:
+    out = tmp_path / "model"
+    args = ["continuum", "--material", "cpti-alpha-1143k", "--stress", "50", "--knockdown", "0.17", "--cell", "bcc", "--until-density", "0.97"]
+    assert main([*args, "--out", str(out), "--points", "120"]) == 0
+    with (out / "curve.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    t = np.array([float(r["time_s"]) for r in rows])
+    rho = np.array([float(r["rel_density"]) for r in rows])
+    assert len(rows) == 120 and t[0] == 0.0 and rho[-1] == pytest.approx(0.97)
+    assert np.all(np.diff(t) > 0) and np.all(np.diff(rho) > 0)
+    law = td.materials.CPTI_ALPHA_1143K
+    m = ContinuumModel(creep_c=law.creep_c, creep_n=law.creep_n, stress_mpa=50.0, knockdown=0.17, rho0=td.cells.bcc().rho0)
+    assert np.allclose(t[1:], m.time_to_density(rho[1:]), rtol=1e-12)
+    # The stress acts in full from t = 0 unless a ramp is given: a ramp of
+    # T delays the hold by n T / (n + 1).
+    ramped = tmp_path / "ramped"
+    assert main([*args, "--ramp-time", "30", "--out", str(ramped), "--points", "120"]) == 0
+    with (ramped / "curve.csv").open() as f:
+        t_ramp = np.array([float(r["time_s"]) for r in csv.DictReader(f)])
+    late = t_ramp > 30.0
+    assert np.allclose(t_ramp[late] - t[late], law.creep_n * 30.0 / (law.creep_n + 1), rtol=1e-9)
+    # A second curve into the same folder needs --overwrite.
+    with pytest.raises(SystemExit) as e:
+        main([*args, "--out", str(out)])
+    assert e.value.code == 2
+    assert main([*args, "--out", str(out), "--overwrite"]) == 0
+
+
+@pytest.mark.parametrize(
+    ("extra", "named"),
+    [(["--rho0", "0.95"], "--rho0"), (["--rho0", "0.6", "--cell", "sc"], "--rho0 or --cell"), (["--rho0", "0.6", "--stress", "-2"], "--stress"),
+     (["--rho0", "0.6", "--C", "1e-5"], "--C and --n"), (["--rho0", "0.6", "--until-density", "0.5"], "--until-density")],
+)
+def test_the_command_names_bad_input(tmp_path: Path, extra: list[str], named: str, capsys: pytest.CaptureFixture[str]) -> None:
+    base = {"--stress": "10", "--until-density": "0.9"}
+    for k in ("--stress", "--until-density"):
+        if k in extra:
+            base.pop(k)
+    argv = ["continuum", *[x for kv in base.items() for x in kv], *extra, "--out", str(tmp_path / "x")]
+    with pytest.raises(SystemExit) as e:
+        main(argv)
+    assert e.value.code == 2
+    assert named in capsys.readouterr().err

@@ -4,7 +4,8 @@
 ``--cell-file``) and writes DIR/curve.csv (streamed),
 DIR/summary.json, DIR/fields_*.vtu with DIR/fields.pvd, and DIR/density.png;
 ``tidens demo`` runs the README's case (sc, Ti-6Al-4V at 1293 K, 10 MPa, to
-rho = 0.9).
+rho = 0.9); ``tidens continuum`` writes the closed-form continuum model's
+curve (DIR/curve.csv) for a material, stress and initial density.
 """
 
 from __future__ import annotations
@@ -18,9 +19,10 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import NoReturn
 
-from . import cells, materials
+from . import cells, continuum, materials
 from ._core import CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, TidensError, UnsupportedError, __version__
 from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings, resume
+from .io import check_output_dir
 from .result import MARK_DENSITIES, Result
 
 # The solver defaults, as the Python API has them (the core's), and the case's.
@@ -320,6 +322,46 @@ def _run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_continuum_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("material")
+    g.add_argument("--material", choices=materials.PRESET_NAMES, help="preset (default ti64-creep-1293k)")
+    g.add_argument("--C", dest="creep_c", type=float, help="Norton coefficient C [MPa^-n s^-1] (with --n, instead of --material)")
+    g.add_argument("--n", dest="creep_n", type=float, help="Norton exponent n (with --C)")
+    g = p.add_argument_group("packing and load")
+    g.add_argument("--rho0", type=float, help="initial relative density, in (0, 0.9) (or --cell)")
+    g.add_argument("--cell", choices=cells.CELL_NAMES, help="take rho0 from this packing of spheres instead of --rho0")
+    g.add_argument("--stress", type=float, required=True, help="applied piston stress sigma [MPa]")
+    g.add_argument("--knockdown", type=float, default=1.0, help="die-wall knock-down factor f, the powder feels f*sigma (default 1)")
+    g.add_argument("--ramp-time", type=float, default=0.0, help="linear ramp of the stress [s] (default 0: the stress acts in full from t = 0)")
+    g = p.add_argument_group("output")
+    g.add_argument("--until-density", type=float, required=True, help="end of the curve, a relative density in (rho0, 1)")
+    g.add_argument("--points", type=int, default=200, help="rows of the curve (default 200)")
+    g.add_argument("--out", type=_folder, required=True, help="output folder, new or empty (see --overwrite)")
+    g.add_argument("--overwrite", action="store_true", help="replace an earlier curve.csv in --out")
+
+
+def _continuum(args: argparse.Namespace) -> int:
+    args.young = args.poisson = None
+    law = _material(args)
+    if (args.rho0 is None) == (args.cell is None):
+        raise ValueError("give --rho0 or --cell (one of them)")
+    rho0 = args.rho0 if args.rho0 is not None else cells.by_name(args.cell).rho0
+    if not (0.0 < rho0 < continuum.STAGE_SWITCH):
+        raise ValueError(f"--rho0 = {rho0}: must be in (0, {continuum.STAGE_SWITCH:g})")
+    model = continuum.for_material(law, args.stress, rho0, knockdown=args.knockdown, ramp_time_s=args.ramp_time)
+    out: Path = args.out
+    check_output_dir(out, args.overwrite)
+    path = continuum.write_curve(model, args.until_density, out / "curve.csv", args.points)
+    marks = [r for r in MARK_DENSITIES if rho0 < r <= args.until_density]
+    times = [float(t) for t in model.time_to_density(marks)] if marks else []
+    print(f"continuum model (Eqs. 2 and 3 of the paper), C = {law.creep_c:.4g} MPa^-n s^-1, n = {law.creep_n:g}, "
+          f"f sigma = {model.cell_stress_mpa:g} MPa, rho0 = {rho0:.5f}, ramp {args.ramp_time:g} s")
+    for r, t in zip(marks, times):
+        print(f"  t({r:g}) = {t:.4g} s")
+    print(f"wrote {path}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="tidens", description="Powder-level FE of hot pressing of titanium powders (units: mm, N, MPa, s).")
     parser.add_argument("--version", action="version", version=f"tidens {__version__}")
@@ -329,6 +371,8 @@ def build_parser() -> argparse.ArgumentParser:
     demo = sub.add_parser("demo", help="the README case: sc Ti-6Al-4V at 10 MPa to rho = 0.9, with a plot")
     demo.add_argument("--out", type=_folder, default=Path("tidens-demo"), help="output folder (default ./tidens-demo; an earlier demo's outputs there are replaced)")
     demo.add_argument("--quiet", action="store_true", help="no progress bar")
+    model = sub.add_parser("continuum", help="the closed-form continuum model's curve (Eqs. 2 and 3 of the paper) for a material, stress and rho0")
+    _add_continuum_options(model)
     return parser
 
 
@@ -346,6 +390,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         ] + (["--quiet"] if args.quiet else [])
         args = parser.parse_args(argv2)
     try:
+        if args.command == "continuum":
+            return _continuum(args)
         return _run(args)
     except (ValueError, TypeError, FileExistsError, UnsupportedError) as e:
         parser.error(str(e))

@@ -20,17 +20,32 @@ at rho0), mapped back from ``t_eff`` to ``t``.
 
 from __future__ import annotations
 
+import csv
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
+
+from .io import atomic_write
 
 B_INITIAL = 1.1
 B_FINAL = 1.8
 STAGE_SWITCH = 0.9
 
 FloatArray = npt.NDArray[np.float64]
+
+
+class NortonLaw(Protocol):
+    """What the model needs of a material: ``eps_dot = creep_c q^creep_n``."""
+
+    @property
+    def creep_c(self) -> float: ...
+
+    @property
+    def creep_n(self) -> float: ...
 
 
 @lru_cache(maxsize=4)
@@ -104,26 +119,28 @@ class ContinuumModel:
 
     def effective_time(self, rho: npt.ArrayLike, points: int = 400) -> FloatArray:
         """Effective time at full load to reach each density [s]: the integral
-        of 1/rho_dot from rho0 (Gauss-Legendre on each stage, with
-        ``rho = rho0 + (rho_1 - rho0) u^2`` to smooth the start)."""
-        targets = np.atleast_1d(np.asarray(rho, dtype=float))
-        if np.any(targets < self.rho0) or np.any(targets >= 1.0):
+        of 1/rho_dot from rho0, for all densities at once (Gauss-Legendre on
+        each stage, with ``rho = rho0 + (rho_1 - rho0) u^2`` to smooth the
+        start and ``rho = 1 - 0.1 ((1 - rho)/0.1)^u`` in the final stage,
+        where 1/rate grows as 1/(1 - rho))."""
+        targets = np.asarray(rho, dtype=float)
+        flat = np.atleast_1d(targets).ravel()
+        if np.any(~np.isfinite(flat)) or np.any(flat < self.rho0) or np.any(flat >= 1.0):
             raise ValueError(f"rho must be in [rho0 = {self.rho0:.5f}, 1)")
         u, w = _gauss_legendre(points)
-        out = np.empty_like(targets)
-        for k, target in enumerate(targets):
-            first = min(target, STAGE_SWITCH)
-            span = first - self.rho0
-            rr = self.rho0 + span * u**2
-            t = float(np.sum(w * 2.0 * span * u * self._slowness(rr)))
-            if target > STAGE_SWITCH:
-                # Final stage: 1/rate ~ 1/(1 - rho) near full density; map
-                # rho = 1 - (1 - 0.9) ((1 - target)/(1 - 0.9))^u.
-                a, b = 1.0 - STAGE_SWITCH, 1.0 - target
-                rr = 1.0 - a * (b / a) ** u
-                drdu = -(1.0 - rr) * np.log(b / a)
-                t += float(np.sum(w * drdu * self._slowness(rr)))
-            out[k] = t
+        # Initial stage, rho0 to min(target, 0.9): one row of nodes per target.
+        span = np.minimum(flat, STAGE_SWITCH) - self.rho0
+        rr = self.rho0 + span[:, None] * u[None, :] ** 2
+        t = (self._slowness(rr) * (w * 2.0 * u)[None, :]).sum(axis=1) * span
+        # Final stage, 0.9 to the target, for the targets beyond it.
+        late = flat > STAGE_SWITCH
+        if np.any(late):
+            a, b = 1.0 - STAGE_SWITCH, 1.0 - flat[late]
+            log_ratio = np.log(b / a)
+            rr = 1.0 - a * np.exp(u[None, :] * log_ratio[:, None])
+            drdu = -(1.0 - rr) * log_ratio[:, None]
+            t[late] += (w[None, :] * drdu * self._slowness(rr)).sum(axis=1)
+        out: FloatArray = t.reshape(np.shape(np.atleast_1d(targets)))
         return out
 
     def _slowness(self, rho: FloatArray) -> FloatArray:
@@ -152,3 +169,45 @@ class ContinuumModel:
         """(time [s], density) from rho0 to ``rho_end``."""
         rho = self.rho0 + (rho_end - self.rho0) * np.linspace(0.0, 1.0, points) ** 2
         return self.time_to_density(rho), rho
+
+
+def for_material(
+    material: NortonLaw,
+    stress_mpa: float,
+    rho0: float,
+    *,
+    knockdown: float = 1.0,
+    ramp_time_s: float = 0.0,
+) -> ContinuumModel:
+    """The continuum model for a material's Norton law (``creep_c``
+    [MPa^-n s^-1], ``creep_n``) under the piston stress ``stress_mpa``
+    [MPa], from the relative density ``rho0``; the stress acts in full from
+    t = 0 unless ``ramp_time_s`` [s] gives a linear ramp."""
+    return ContinuumModel(
+        creep_c=material.creep_c,
+        creep_n=material.creep_n,
+        stress_mpa=stress_mpa,
+        rho0=rho0,
+        knockdown=knockdown,
+        ramp_time_s=ramp_time_s,
+    )
+
+
+def write_curve(model: ContinuumModel, until_density: float, path: Path, points: int = 200) -> Path:
+    """Writes the model's curve from rho0 to ``until_density`` as CSV
+    (``time_s``, ``rel_density``; ``points`` rows, closer together near
+    rho0) to ``path``, through a temporary file renamed once complete;
+    returns ``path``."""
+    if not (model.rho0 < until_density < 1.0):
+        raise ValueError(f"until_density = {until_density}: must be in (rho0 = {model.rho0:.5f}, 1)")
+    if isinstance(points, bool) or not isinstance(points, int) or points < 2:
+        raise ValueError(f"points = {points!r}: must be an integer >= 2")
+    time_s, rho = model.curve(until_density, points)
+
+    def write(tmp: Path) -> None:
+        with tmp.open("w", newline="") as f:
+            out = csv.writer(f)
+            out.writerow(["time_s", "rel_density"])
+            out.writerows((repr(float(t)), repr(float(r))) for t, r in zip(time_s, rho))
+
+    return atomic_write(path, write)
