@@ -111,6 +111,20 @@ def test_target_density_must_exceed_rho0(quick_case: td.Case) -> None:
 def test_tmp_formula_agrees_with_the_preset() -> None:
     c = td.materials.tmp_creep_coefficient(0.0096, 191.0, 7.4, 2.8)
     assert c == pytest.approx(td.materials.TI64_TMP_1133_1293K.creep_c, rel=0.01)
+    # From the physical parameters: (4/3) 5n/(4n+1) (dV/V) / dt / sigma0, linear.
+    m = td.materials.thermal_cycling()
+    assert (m.creep_n, m.young_mpa, m.poisson) == (1.0, 4.35e4, 0.3)
+    assert m.creep_c == pytest.approx(4 / 3 * 5 * 2.8 / (4 * 2.8 + 1) * 0.0096 / 191.0 / 7.4, rel=1e-14)
+    assert m.creep_c == pytest.approx(td.materials.TI64_TMP_1133_1293K.creep_c, rel=0.01)
+    # A cycle twice as long, or an internal stress twice as large, halves the rate.
+    assert td.materials.thermal_cycling(cycle_s=382.0).creep_c == pytest.approx(m.creep_c / 2, rel=1e-14)
+    assert td.materials.thermal_cycling(internal_stress_mpa=14.8).creep_c == pytest.approx(m.creep_c / 2, rel=1e-14)
+    with pytest.raises(ValueError, match="volume_mismatch"):
+        td.materials.thermal_cycling(volume_mismatch=-0.01)
+    with pytest.raises(ValueError, match="cycle_s"):
+        td.materials.thermal_cycling(cycle_s=float("nan"))
+    with pytest.raises(TypeError, match="creep_n"):
+        td.materials.thermal_cycling(creep_n="2.8")  # type: ignore[arg-type]
 
 
 def test_solves_release_the_gil(quick_case: td.Case) -> None:

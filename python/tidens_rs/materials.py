@@ -7,10 +7,13 @@ which make the problem well posed and barely change densification. Creep:
 The transformation-mismatch-plasticity preset (thermal cycling of Ti-6Al-4V,
 n = 1) is linear in stress only while stresses stay near the internal stress
 (7.4 MPa); the contact stresses of a powder exceed it, a limitation the paper
-shares. :func:`tmp_creep_coefficient` gives C for another cycle.
+shares. :func:`thermal_cycling` builds the material of another cycle from
+its physical parameters (:func:`tmp_creep_coefficient` gives its C).
 """
 
 from __future__ import annotations
+
+import math
 
 from ._core import PRESET_NAMES, Material, tmp_creep_coefficient
 
@@ -42,6 +45,48 @@ def custom(
     return Material(young_mpa, poisson, creep_c, creep_n)
 
 
+def thermal_cycling(
+    volume_mismatch: float = 0.0096,
+    cycle_s: float = 191.0,
+    internal_stress_mpa: float = 7.4,
+    creep_n: float = 2.8,
+    young_mpa: float = DEFAULT_YOUNG_MPA,
+    poisson: float = DEFAULT_POISSON,
+) -> Material:
+    """Transformation-mismatch plasticity under thermal cycling through a
+    phase change, averaged over a cycle as a linear (n = 1) Norton law
+    (Greenwood and Johnson): ``eps_dot = (4/3) 5n/(4n+1) (dV/V) / dt_cycle
+    * q / sigma0``, with ``volume_mismatch`` dV/V of the transformation,
+    ``cycle_s`` the full period of the cycle [s], ``internal_stress_mpa``
+    sigma0 [MPa] (the internal stress of the mismatch) and ``creep_n`` the
+    creep exponent of the weaker phase. The defaults are the paper's
+    Ti-6Al-4V cycle between 1133 and 1293 K: C = 1.039e-5, within 1 % of
+    the preset's rounded 1.045e-5.
+
+    The law is the first term of an expansion in q / sigma0: it holds while
+    the stress stays small against the internal stress. Averaged over a
+    packing the applied stresses of the paper (5 to 20 MPa) are of the
+    order of sigma0 = 7.4 MPa, and in the necks between particles the
+    stresses reach several times the applied one, so there the law is used
+    beyond its range (as in the paper).
+    """
+    given = {"volume_mismatch": volume_mismatch, "cycle_s": cycle_s, "internal_stress_mpa": internal_stress_mpa, "creep_n": creep_n}
+    for name, value in given.items():
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise TypeError(f"{name} = {value!r}: must be a real number")
+    ranges = (
+        ("volume_mismatch", volume_mismatch, "in (0, 0.2]", 0.0 < volume_mismatch <= 0.2),
+        ("cycle_s", cycle_s, "> 0 s", cycle_s > 0.0),
+        ("internal_stress_mpa", internal_stress_mpa, "> 0 MPa", internal_stress_mpa > 0.0),
+        ("creep_n", creep_n, "in [1, 50]", 1.0 <= creep_n <= 50.0),
+    )
+    for name, value, allowed, ok in ranges:
+        if not (math.isfinite(value) and ok):
+            raise ValueError(f"{name} = {value!r}: must be {allowed}")
+    c = tmp_creep_coefficient(volume_mismatch, cycle_s, internal_stress_mpa, creep_n)
+    return Material(young_mpa, poisson, c, 1.0)
+
+
 def name_of(material: Material) -> str | None:
     """The preset name of ``material`` if it equals a preset, else None."""
     for name, m in PRESETS.items():
@@ -71,5 +116,6 @@ __all__ = [
     "by_name",
     "custom",
     "name_of",
+    "thermal_cycling",
     "tmp_creep_coefficient",
 ]
