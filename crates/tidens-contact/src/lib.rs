@@ -6,7 +6,10 @@
 //! - detection with parry (`parry3d-f64`): each surface is triangulated in its
 //!   current configuration and the nodes of one surface are projected onto the
 //!   other's `TriMesh`, only for pairs of surfaces whose bounding boxes meet;
-//!   the triangle found names the quad facet the node is paired with;
+//!   the triangle found names the quad facet the node is paired with, one on
+//!   each other surface within the search distance (a node in the pocket
+//!   where two particles meet is held off both), each pair with its own
+//!   multiplier;
 //! - enforcement node to surface, both ways (two-pass, each pass carrying half
 //!   the tributary area so that identical particles are treated alike), on
 //!   bilinear quad facets, by an augmented Lagrangian: the energy of a slave
@@ -23,7 +26,7 @@
 //!   semi-definite one, which the solver uses). Between Newton solves,
 //!   [`ParticleContact::augment`] updates the multipliers (Uzawa) until the
 //!   penetration is below its tolerance.
-//! - within a step each node keeps the facet it was paired with at the
+//! - within a step each node keeps the facets it was paired with at the
 //!   step's start ([`ParticleContact::pair`]), so the residual stays smooth
 //!   while Newton iterates.
 
@@ -122,8 +125,29 @@ pub struct ContactTerm {
     pub location: [f64; 2],
 }
 
-/// Saved multiplier state: per surface, per node (lambda, tie, tie lambda).
-pub type StateSnapshot = Vec<Vec<(f64, Option<(usize, usize, [f64; 2])>, [f64; 3])>>;
+/// Saved multiplier state (every slave node's multipliers and ties against
+/// each master surface), to redo a step from.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StateSnapshot(Vec<Vec<NodeStates>>);
+
+impl StateSnapshot {
+    /// How many slave-master pairs carry a multiplier or a tie.
+    pub fn len(&self) -> usize {
+        self.0.iter().flatten().map(Vec::len).sum()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// The multiplier states of one slave node of one pass, one per master
+/// surface it has a multiplier or a tie against, in master order.
+type NodeStates = Vec<(usize, NodeState)>;
+
+/// The facets one slave node is paired with for the step, at most one per
+/// master surface, in master order.
+type NodePairing = Vec<(usize, usize)>;
 
 /// Multiplier state of one slave node of one pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -139,8 +163,8 @@ struct NodeState {
 /// The state of a [`ParticleContact`] that a run carries from step to step.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ContactCheckpoint {
-    state: Vec<Vec<NodeState>>,
-    pairing: Vec<Vec<Option<(usize, usize)>>>,
+    state: Vec<Vec<NodeStates>>,
+    pairing: Vec<Vec<NodePairing>>,
 }
 
 /// Contact between the surfaces of a scene's particles.
@@ -148,12 +172,14 @@ pub struct ContactCheckpoint {
 pub struct ParticleContact {
     surfaces: Vec<ContactSurface>,
     settings: ContactSettings,
-    /// Per surface, per node: the state of its pass as slave.
-    state: Vec<Vec<NodeState>>,
-    /// Per surface, per node: the master (surface, facet) it is paired with
-    /// for the current step (see [`ParticleContact::pair`]).
+    /// Per surface, per node: the state of its pass as slave, against each
+    /// master surface.
+    state: Vec<Vec<NodeStates>>,
+    /// Per surface, per node: the master (surface, facet) pairs it is paired
+    /// with for the current step, one per master surface within the search
+    /// distance (see [`ParticleContact::pair`]).
     #[serde(skip)]
-    pairing: Vec<Vec<Option<(usize, usize)>>>,
+    pairing: Vec<Vec<NodePairing>>,
 }
 
 /// The contact contributions at one configuration.
@@ -212,9 +238,12 @@ impl ParticleContact {
         }
         let state = surfaces
             .iter()
-            .map(|s| vec![NodeState::default(); s.nodes.len()])
+            .map(|s| vec![Vec::new(); s.nodes.len()])
             .collect();
-        let pairing = surfaces.iter().map(|s| vec![None; s.nodes.len()]).collect();
+        let pairing = surfaces
+            .iter()
+            .map(|s| vec![Vec::new(); s.nodes.len()])
+            .collect();
         Ok(Self {
             surfaces,
             settings,
@@ -306,31 +335,18 @@ impl ParticleContact {
         Some((best, (proj.point - q).length()))
     }
 
-    /// The nearest facet over the candidate masters of slave surface `s`.
-    fn nearest_over(
-        &self,
-        x: &[f64],
-        s: usize,
-        k: usize,
-        masters: &[usize],
-        meshes: &[Option<TriMesh>],
-    ) -> Option<(usize, usize)> {
-        masters
-            .iter()
-            .filter_map(|&m| {
-                let (facet, d) = self.nearest(x, s, k, m, meshes[m].as_ref()?)?;
-                Some((m, facet, d))
-            })
-            .min_by(|a, b| a.2.total_cmp(&b.2))
-            .map(|(m, facet, _)| (m, facet))
-    }
-
-    /// Pairs every slave node with the master facet nearest to it in the
-    /// configuration `x` (within the search distance), for the coming step.
-    /// Within a step a paired node keeps its facet (its penetration measured
-    /// on the facet's bilinear patch, extended beyond its edges if need be),
-    /// so the residual stays smooth while Newton iterates: switching facets
-    /// between iterations would make it jump.
+    /// Pairs every slave node with the facet nearest to it of each master
+    /// surface within the search distance, in the configuration `x`, for the
+    /// coming step. A node between two particles (in the pocket where they
+    /// meet) is so held off both: paired with one only, it could press on
+    /// that one and pass through the other unseen (measured on the sc2 cell
+    /// of spheroids c/a = 2, whose small particles fill such pockets: a node
+    /// held off one large particle went 2e-3 mm into the other, 4 % of the
+    /// radius, and the run failed). Within a step a paired node keeps its
+    /// facets (its penetration measured on each facet's bilinear patch,
+    /// extended beyond its edges if need be), so the residual stays smooth
+    /// while Newton iterates: switching facets between iterations would
+    /// make it jump.
     ///
     /// A node keeps the facet of the previous step while its projection stays
     /// within that facet grown by a tenth of its size: choosing afresh every
@@ -347,18 +363,20 @@ impl ParticleContact {
             let near = facet::penetration_on(kind, &p, &q, xi) > -self.settings.search_distance;
             inside && near
         };
-        let pairing: Vec<Vec<Option<(usize, usize)>>> = (0..self.surfaces.len())
-            .map(|s| {
-                (0..self.surfaces[s].nodes.len())
-                    .map(|k| {
-                        match self
-                            .pairing
-                            .get(s)
-                            .and_then(|v| v.get(k).copied().flatten())
-                        {
-                            Some((m, facet)) if keep(s, k, m, facet) => Some((m, facet)),
-                            _ => None,
-                        }
+        let pairing: Vec<Vec<NodePairing>> = self
+            .pairing
+            .iter()
+            .enumerate()
+            .map(|(s, nodes)| {
+                nodes
+                    .iter()
+                    .enumerate()
+                    .map(|(k, links)| {
+                        links
+                            .iter()
+                            .copied()
+                            .filter(|&(m, f)| keep(s, k, m, f))
+                            .collect()
                     })
                     .collect()
             })
@@ -367,10 +385,10 @@ impl ParticleContact {
         self.pair_unpaired(x);
     }
 
-    /// Pairs the slave nodes not paired yet that have come within the search
-    /// distance of a facet in the configuration `x`; returns how many of
-    /// them touch or press (so that a converged step can be checked for
-    /// contacts that appeared during it).
+    /// Pairs the slave nodes with the master surfaces within the search
+    /// distance that they are not paired with yet, in the configuration
+    /// `x`; returns how many of the new pairs touch or press (so that a
+    /// converged step can be checked for contacts that appeared during it).
     pub fn pair_unpaired(&mut self, x: &[f64]) -> usize {
         let pairs = self.candidate_pairs(x);
         let meshes = self.search_meshes(x, &pairs, |_| true);
@@ -380,23 +398,51 @@ impl ParticleContact {
         }
         let mut touching = 0;
         for s in 0..self.surfaces.len() {
-            let found: Vec<Option<(usize, usize)>> = (0..self.surfaces[s].nodes.len())
+            let found: Vec<NodePairing> = (0..self.surfaces[s].nodes.len())
                 .into_par_iter()
-                .map(|k| match self.pairing[s][k] {
-                    Some(_) => None,
-                    None => self.nearest_over(x, s, k, &masters[s], &meshes),
+                .map(|k| {
+                    masters[s]
+                        .iter()
+                        .filter(|&&m| !self.pairing[s][k].iter().any(|&(pm, _)| pm == m))
+                        .filter_map(|&m| {
+                            let (facet, _) = self.nearest(x, s, k, m, meshes[m].as_ref()?)?;
+                            Some((m, facet))
+                        })
+                        .collect()
                 })
                 .collect();
-            for (k, f) in found.into_iter().enumerate() {
-                if let Some((m, facet)) = f {
-                    self.pairing[s][k] = Some((m, facet));
+            for (k, new) in found.into_iter().enumerate() {
+                for (m, facet) in new {
                     if self.node_term(x, s, k, m, facet, false).is_some() {
                         touching += 1;
                     }
+                    let links = &mut self.pairing[s][k];
+                    let at = links.partition_point(|&(pm, _)| pm < m);
+                    links.insert(at, (m, facet));
                 }
             }
         }
         touching
+    }
+
+    /// The multiplier state of slave node `k` of surface `s` against master
+    /// surface `m` (none yet: zero).
+    fn node_state(&self, s: usize, k: usize, m: usize) -> NodeState {
+        self.state[s][k]
+            .iter()
+            .find(|(sm, _)| *sm == m)
+            .map_or_else(NodeState::default, |(_, st)| *st)
+    }
+
+    /// The multiplier state of slave node `k` of surface `s` against master
+    /// surface `m`, made if it is not there yet.
+    fn node_state_mut(&mut self, s: usize, k: usize, m: usize) -> &mut NodeState {
+        let states = &mut self.state[s][k];
+        let at = states.partition_point(|(sm, _)| *sm < m);
+        if states.get(at).is_none_or(|(sm, _)| *sm != m) {
+            states.insert(at, (m, NodeState::default()));
+        }
+        &mut states[at].1
     }
 
     /// Contact terms at the configuration `x` (current node coordinates,
@@ -411,22 +457,19 @@ impl ParticleContact {
             .collect();
         let terms = work
             .par_iter()
-            .filter_map(|&(s, k)| {
-                let st = &self.state[s][k];
-                if let Some((m, facet, xi)) = st.tie {
-                    return Some(self.tied_term(
-                        x,
-                        s,
-                        k,
-                        m,
-                        facet,
-                        xi,
-                        st.tie_lambda,
-                        with_tangent,
-                    ));
-                }
-                let (m, facet) = self.pairing.get(s)?.get(k).copied().flatten()?;
-                self.node_term(x, s, k, m, facet, with_tangent)
+            .flat_map_iter(|&(s, k)| {
+                let tied = self.state[s][k].iter().filter_map(move |&(m, st)| {
+                    let (tm, facet, xi) = st.tie?;
+                    debug_assert_eq!(tm, m);
+                    Some(self.tied_term(x, s, k, m, facet, xi, st.tie_lambda, with_tangent))
+                });
+                let pressed = self.pairing[s][k].iter().filter_map(move |&(m, facet)| {
+                    if self.node_state(s, k, m).tie.is_some() {
+                        return None;
+                    }
+                    self.node_term(x, s, k, m, facet, with_tangent)
+                });
+                tied.chain(pressed).collect::<Vec<_>>()
             })
             .collect::<Vec<_>>();
         let mut terms = terms;
@@ -442,7 +485,10 @@ impl ParticleContact {
             .map(|t| (t.slave.0, t.master.0))
             .collect();
         for t in &mut terms {
-            let tied = self.state[t.slave.0][t.slave.1].tie.is_some();
+            let tied = self
+                .node_state(t.slave.0, t.slave.1, t.master.0)
+                .tie
+                .is_some();
             if t.pressure <= 0.0 && !tied && pressed.contains(&(t.slave.0, t.master.0)) {
                 t.tangent.fill(0.0);
             }
@@ -487,7 +533,8 @@ impl ParticleContact {
         let xi = facet::project_on(kind, &p, &q);
         // Nodes clearly apart from the facet need no derivatives.
         let band = -0.1 * self.settings.search_distance;
-        if self.state[s][k].lambda <= 0.0 && facet::penetration_on(kind, &p, &q, xi) <= band {
+        let lambda = self.node_state(s, k, m).lambda;
+        if lambda <= 0.0 && facet::penetration_on(kind, &p, &q, xi) <= band {
             return None;
         }
         let area = 0.5 * self.surfaces[s].areas[k];
@@ -499,7 +546,7 @@ impl ParticleContact {
             let d = facet::gradient_on(kind, &p, &q, xi);
             (d.value, d.gradient, None)
         };
-        let pressure = (self.state[s][k].lambda + eps * pen).max(0.0);
+        let pressure = (lambda + eps * pen).max(0.0);
         // A node near the surface without pressure (a gap below a tenth of
         // the search distance) brings [`TOUCH_STIFFNESS`] of the penalty to
         // the tangent (not to the force) while its pair of surfaces has no
@@ -604,34 +651,36 @@ impl ParticleContact {
     }
 
     /// Uzawa update after a converged solve: the multipliers take the
-    /// pressures of `eval` (slave nodes not in it lose theirs); tied nodes
-    /// add their gap times the penalty. Returns the largest penetration
-    /// before the update \[mm\].
+    /// pressures of `eval` (slave-master pairs not in it lose theirs); tied
+    /// nodes add their gap times the penalty. Returns the largest
+    /// penetration before the update \[mm\].
     pub fn augment(&mut self, x: &[f64], eval: &ContactEvaluation) -> f64 {
         let eps = self.settings.penalty;
-        let mut active: Vec<Vec<bool>> = self
-            .surfaces
-            .iter()
-            .map(|s| vec![false; s.nodes.len()])
-            .collect();
+        let mut active: std::collections::BTreeSet<(usize, usize, usize)> = Default::default();
         for t in &eval.terms {
-            let (s, k) = t.slave;
-            active[s][k] = true;
-            if let Some((m, facet, xi)) = self.state[s][k].tie {
+            let ((s, k), m) = (t.slave, t.master.0);
+            active.insert((s, k, m));
+            if let Some((_, facet, xi)) = self.node_state(s, k, m).tie {
                 let (p, q, _) = self.gather(x, s, k, m, facet);
                 let gap = facet::tie_gap_on(self.surfaces[m].kind, &p, &q, xi);
+                let st = self.node_state_mut(s, k, m);
                 for i in 0..3 {
-                    self.state[s][k].tie_lambda[i] += eps * gap[i];
+                    st.tie_lambda[i] += eps * gap[i];
                 }
-            } else {
-                self.state[s][k].lambda = t.pressure;
+            } else if t.pressure > 0.0 || self.node_state(s, k, m).lambda > 0.0 {
+                self.node_state_mut(s, k, m).lambda = t.pressure;
             }
         }
-        for (s, states) in self.state.iter_mut().enumerate() {
-            for (k, st) in states.iter_mut().enumerate() {
-                if !active[s][k] && st.tie.is_none() {
-                    st.lambda = 0.0;
+        // Pairs not evaluated lose their multiplier; states that carry
+        // nothing any more are dropped.
+        for (s, nodes) in self.state.iter_mut().enumerate() {
+            for (k, states) in nodes.iter_mut().enumerate() {
+                for (m, st) in states.iter_mut() {
+                    if st.tie.is_none() && !active.contains(&(s, k, *m)) {
+                        st.lambda = 0.0;
+                    }
                 }
+                states.retain(|(_, st)| st.tie.is_some() || st.lambda != 0.0);
             }
         }
         eval.max_penetration()
@@ -645,10 +694,10 @@ impl ParticleContact {
             return;
         }
         for t in &eval.terms {
-            let (s, k) = t.slave;
-            let st = &mut self.state[s][k];
-            if st.tie.is_none() && t.pressure > 0.0 {
-                st.tie = Some((t.master.0, t.master.1, t.location));
+            let ((s, k), m) = (t.slave, t.master.0);
+            if self.node_state(s, k, m).tie.is_none() && t.pressure > 0.0 {
+                let st = self.node_state_mut(s, k, m);
+                st.tie = Some((m, t.master.1, t.location));
                 st.tie_lambda = [0.0; 3];
             }
         }
@@ -686,21 +735,10 @@ impl ParticleContact {
     }
 
     pub fn state_snapshot(&self) -> StateSnapshot {
-        self.state
-            .iter()
-            .map(|v| v.iter().map(|s| (s.lambda, s.tie, s.tie_lambda)).collect())
-            .collect()
+        StateSnapshot(self.state.clone())
     }
 
     pub fn restore(&mut self, snapshot: &StateSnapshot) {
-        for (states, saved) in self.state.iter_mut().zip(snapshot) {
-            for (st, &(lambda, tie, tie_lambda)) in states.iter_mut().zip(saved) {
-                *st = NodeState {
-                    lambda,
-                    tie,
-                    tie_lambda,
-                };
-            }
-        }
+        self.state.clone_from(&snapshot.0);
     }
 }

@@ -1,0 +1,157 @@
+//! Pairing: a slave node near two master surfaces (in the pocket where two
+//! particles meet) is held off both, each with its own multiplier.
+
+use tidens_contact::{ContactMode, ContactSettings, ContactSurface, ParticleContact};
+
+/// Penetration of the pocket's slave nodes into each wall [mm].
+const DEPTH: f64 = 0.01;
+
+/// Two walls meeting at a right angle along the y axis, the pocket x > 0,
+/// z > 0 between them: wall A in the plane z = 0 (outward normal +z), wall
+/// B in the plane x = 0 (outward normal +x), each 2 x 2 quads of size 0.5.
+/// Slave C: one quad in the plane z = -DEPTH facing -z, from x = -DEPTH
+/// (inside both walls) to x = 0.3 (inside A only). Nodes, and the surfaces
+/// A, B, C.
+fn pocket() -> (Vec<[f64; 3]>, Vec<ContactSurface>) {
+    let mut nodes = Vec::new();
+    let mut grid = |at: &dyn Fn(f64, f64) -> [f64; 3]| -> Vec<[usize; 4]> {
+        let first = nodes.len();
+        for j in 0..3 {
+            for i in 0..3 {
+                nodes.push(at(0.5 * i as f64, 0.5 * j as f64));
+            }
+        }
+        let id = |i: usize, j: usize| first + 3 * j + i;
+        let mut quads = Vec::new();
+        for j in 0..2 {
+            for i in 0..2 {
+                quads.push([id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        quads
+    };
+    // Counter-clockwise about the outward normal: (u, v) -> (x, y) for +z,
+    // (u, v) -> (y, z) for +x.
+    let a = grid(&|u, v| [u, v, 0.0]);
+    let b = grid(&|u, v| [0.0, u, v]);
+    let first = nodes.len();
+    for p in [
+        [-DEPTH, 0.4, -DEPTH],
+        [-DEPTH, 0.6, -DEPTH],
+        [0.3, 0.6, -DEPTH],
+        [0.3, 0.4, -DEPTH],
+    ] {
+        nodes.push(p);
+    }
+    // Clockwise seen from +z: the outward normal is -z.
+    let c = vec![[first, first + 1, first + 2, first + 3]];
+    let surfaces = [a, b, c]
+        .iter()
+        .map(|quads| ContactSurface::from_quads(quads, &nodes).unwrap())
+        .collect();
+    (nodes, surfaces)
+}
+
+fn contact(surfaces: Vec<ContactSurface>) -> ParticleContact {
+    ParticleContact::new(
+        surfaces,
+        ContactSettings {
+            mode: ContactMode::Frictionless,
+            penalty: 100.0,
+            search_distance: 0.05,
+            curvature_stiffness: false,
+            touch_stiffness_cap: f64::INFINITY,
+        },
+    )
+    .unwrap()
+}
+
+#[test]
+fn a_node_in_the_pocket_between_two_surfaces_is_held_off_both() {
+    let (nodes, surfaces) = pocket();
+    let x: Vec<f64> = nodes.iter().flatten().copied().collect();
+    let mut c = contact(surfaces);
+    c.pair(&x);
+    let eval = c.evaluate(&x, false);
+    let slave_terms = |k: usize| {
+        let mut masters: Vec<(usize, f64)> = eval
+            .terms
+            .iter()
+            .filter(|t| t.slave == (2, k))
+            .map(|t| (t.master.0, t.penetration))
+            .collect();
+        masters.sort_by_key(|m| m.0);
+        masters
+    };
+    for k in 0..4 {
+        let terms = slave_terms(k);
+        let in_pocket = nodes[c.surfaces()[2].nodes[k]][0] < 0.0;
+        // The nodes at x = -DEPTH press into both walls, each by DEPTH; the
+        // others into A only (B is farther than the search distance).
+        let expected: &[usize] = if in_pocket { &[0, 1] } else { &[0] };
+        assert_eq!(
+            terms.iter().map(|t| t.0).collect::<Vec<_>>(),
+            expected,
+            "node {k}: {terms:?}"
+        );
+        for (m, pen) in terms {
+            assert!(
+                (pen - DEPTH).abs() < 1e-12,
+                "node {k} into surface {m}: {pen}"
+            );
+        }
+    }
+    // The force on a node in the pocket pushes it out of both walls: +x and +z.
+    let node = c.surfaces()[2].nodes[0];
+    let mut f = [0.0; 3];
+    for t in eval.terms.iter().filter(|t| t.slave == (2, 0)) {
+        for i in 0..3 {
+            f[i] -= t.force[i];
+        }
+    }
+    assert!(
+        f[0] > 0.0 && f[2] > 0.0 && f[1].abs() < 1e-12 * f[0],
+        "force on node {node}: {f:?}"
+    );
+    assert!(
+        (f[0] - f[2]).abs() < 1e-12 * f[0],
+        "equal depths, equal pushes: {f:?}"
+    );
+}
+
+#[test]
+fn each_surface_pair_keeps_its_own_multiplier() {
+    let (nodes, surfaces) = pocket();
+    let x: Vec<f64> = nodes.iter().flatten().copied().collect();
+    let mut c = contact(surfaces);
+    c.pair(&x);
+    let eval = c.evaluate(&x, false);
+    let before = c.state_snapshot();
+    c.augment(&x, &eval);
+    // After the update the multipliers are the pressures: with the same
+    // penetration the pressure of each pair doubles (lambda + eps p with
+    // lambda = eps p), against either wall.
+    let again = c.evaluate(&x, false);
+    for t in eval.terms.iter().filter(|t| t.pressure > 0.0) {
+        let u = again
+            .terms
+            .iter()
+            .find(|u| u.slave == t.slave && u.master == t.master)
+            .expect("the pair is still evaluated");
+        assert!(
+            (u.pressure - 2.0 * t.pressure).abs() < 1e-12 * t.pressure,
+            "{t:?} -> {u:?}"
+        );
+    }
+    assert!(
+        again
+            .terms
+            .iter()
+            .filter(|t| t.slave == (2, 0) && t.pressure > 0.0)
+            .count()
+            == 2
+    );
+    // A step redone from the snapshot starts from the old multipliers.
+    c.restore(&before);
+    assert_eq!(c.evaluate(&x, false), eval);
+}
