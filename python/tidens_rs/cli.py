@@ -5,7 +5,9 @@
 DIR/summary.json, DIR/fields_*.vtu with DIR/fields.pvd, and DIR/density.png;
 ``tidens demo`` runs the README's case (sc, Ti-6Al-4V at 1293 K, 10 MPa, to
 rho = 0.9); ``tidens continuum`` writes the closed-form continuum model's
-curve (DIR/curve.csv) for a material, stress and initial density.
+curve (DIR/curve.csv) for a material, stress and initial density;
+``tidens sweep`` runs one case over lists of stresses, materials, cells and
+aspect ratios (``tidens_rs.sweep``).
 """
 
 from __future__ import annotations
@@ -15,13 +17,13 @@ import dataclasses
 import re
 import sys
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NoReturn
 
-from . import cells, continuum, materials
+from . import cells, continuum, materials, sweep
 from ._core import CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, TidensError, UnsupportedError, __version__
-from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings, resume
+from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, FINISHED, Case, SolverSettings, resume
 from .io import check_output_dir
 from .result import MARK_DENSITIES, Result
 
@@ -362,6 +364,73 @@ def _continuum(args: argparse.Namespace) -> int:
     return 0
 
 
+def _name_list(choices: Sequence[str]) -> Callable[[str], list[str]]:
+    def parse(text: str) -> list[str]:
+        names = [x.strip() for x in text.split(",") if x.strip()]
+        bad = [x for x in names if x not in choices]
+        if bad or not names:
+            raise argparse.ArgumentTypeError(f"{text!r}: expected comma-separated names among {', '.join(choices)}")
+        return names
+
+    return parse
+
+
+def _add_sweep_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("what is swept (comma-separated lists; every combination is a point)")
+    g.add_argument("--stress", type=_float_list, required=True, help="applied piston stresses sigma [MPa], e.g. 5,10,15")
+    g.add_argument("--material", type=_name_list(materials.PRESET_NAMES), default=["ti64-creep-1293k"], help="material presets (default ti64-creep-1293k)")
+    g.add_argument("--cell", type=_name_list(cells.CELL_NAMES), default=["sc"], help="packings (default sc)")
+    g.add_argument("--aspect-ratio", type=_float_list, default=[1.0], help="spheroid c/a, c along the load (default 1)")
+    g = p.add_argument_group("the rest of each case")
+    g.add_argument("--knockdown", type=float, default=_CASE_DEFAULTS["knockdown"], help=f"die-wall knock-down factor f (default {_CASE_DEFAULTS['knockdown']:g})")
+    g.add_argument("--ramp-time", type=float, default=_CASE_DEFAULTS["ramp_time_s"], help=f"linear ramp of the stress [s] (default {_CASE_DEFAULTS['ramp_time_s']:g})")
+    g.add_argument("--until-density", type=float, help="stop each run at this relative density")
+    g.add_argument("--until-time", type=float, help="stop each run at this time [s]")
+    g.add_argument("--mesh-level", type=int, default=DEFAULT_MESH_LEVEL, help=f"mesh level (default {DEFAULT_MESH_LEVEL})")
+    g.add_argument("--tolerance", type=float, default=DEFAULT_TOLERANCE, help=f"time-integration accuracy (default {DEFAULT_TOLERANCE:g})")
+    g.add_argument("--element", choices=ELEMENTS, default=_DEFAULTS.element, help=f"element (default {_DEFAULTS.element})")
+    g.add_argument("--no-error-estimate", dest="error_estimate", action="store_false", help="skip each run's coarse companion")
+    g = p.add_argument_group("where and how")
+    g.add_argument("--out", type=_folder, required=True, help="the sweep's folder: one folder per point and the table sweep.csv / sweep.parquet; a restarted sweep skips finished points and resumes interrupted ones")
+    g.add_argument("--workers", type=int, help="worker processes on this machine, one point and one thread each (default: the cores)")
+    g.add_argument("--scheduler", metavar="ADDRESS", help="run the points on this Dask scheduler instead (tcp://host:port; its workers need tidens and see --out at the same path)")
+    g.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    if args.until_density is None and args.until_time is None:
+        raise ValueError("give --until-density, --until-time or both")
+    base = Case(
+        cell=cells.by_name(args.cell[0], cells.DEFAULT_RADIUS_MM, args.aspect_ratio[0]),
+        material=materials.by_name(args.material[0]),
+        stress_mpa=args.stress[0],
+        knockdown=args.knockdown,
+        ramp_time_s=args.ramp_time,
+        solver=SolverSettings(mesh_level=args.mesh_level, tolerance=args.tolerance, element=args.element),
+    )
+    rows = sweep.run(
+        base,
+        args.out,
+        until_density=args.until_density,
+        until_time_s=args.until_time,
+        stresses_mpa=args.stress,
+        materials=args.material,
+        cells=args.cell,
+        aspect_ratios=args.aspect_ratio,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        error_estimate=args.error_estimate,
+        progress=not args.quiet,
+    )
+    marks = [f"{m:g}" for m in MARK_DENSITIES]
+    print(f"{'point':<44} {'status':<16} " + " ".join(f"{'t(' + k + ') [s]':>13}" for k in marks))
+    for r in rows:
+        print(f"{r['name']:<44} {str(r['status']):<16} " + " ".join(f"{_fmt(r[f't_{k}_s']):>13}" for k in marks))
+    failed = [r for r in rows if r["status"] not in FINISHED]
+    print(f"wrote {args.out / sweep.TABLE_CSV}" + ("" if not (args.out / sweep.TABLE_PARQUET).exists() else f", {args.out / sweep.TABLE_PARQUET}"))
+    return 3 if failed else 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="tidens", description="Powder-level FE of hot pressing of titanium powders (units: mm, N, MPa, s).")
     parser.add_argument("--version", action="version", version=f"tidens {__version__}")
@@ -371,6 +440,8 @@ def build_parser() -> argparse.ArgumentParser:
     demo = sub.add_parser("demo", help="the README case: sc Ti-6Al-4V at 10 MPa to rho = 0.9, with a plot")
     demo.add_argument("--out", type=_folder, default=Path("tidens-demo"), help="output folder (default ./tidens-demo; an earlier demo's outputs there are replaced)")
     demo.add_argument("--quiet", action="store_true", help="no progress bar")
+    sweep_parser = sub.add_parser("sweep", help="one case over lists of stresses, materials, cells and aspect ratios, in parallel, into one folder per point and a table")
+    _add_sweep_options(sweep_parser)
     model = sub.add_parser("continuum", help="the closed-form continuum model's curve (Eqs. 2 and 3 of the paper) for a material, stress and rho0")
     _add_continuum_options(model)
     return parser
@@ -392,6 +463,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         if args.command == "continuum":
             return _continuum(args)
+        if args.command == "sweep":
+            return _sweep(args)
         return _run(args)
     except (ValueError, TypeError, FileExistsError, UnsupportedError) as e:
         parser.error(str(e))

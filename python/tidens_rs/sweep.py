@@ -1,0 +1,424 @@
+"""Sweeps: one case over lists of stresses, materials, cells and aspect
+ratios, each point in a worker process of its own, into one folder per
+point and a combined table.
+
+    import tidens_rs as td
+    base = td.Case(cell=td.cells.sc(), material=td.materials.TI64_CREEP_1293K, stress_mpa=10.0)
+    table = td.sweep.run(base, "out", until_density=0.9, stresses_mpa=[5, 10, 15], cells=["sc", "bcc"], workers=2)
+
+Each point is the base case with the swept values put in; its outputs go to
+``out/<name>/`` (a ``tidens run`` folder: curve, summary, fields, plot,
+checkpoint), and one row per point to ``out/sweep.csv`` and
+``out/sweep.parquet`` (the parameters, the status, the times to density and
+their estimated errors, the continuum model's times, the cost), rewritten
+as each point finishes. A restarted sweep does not run a finished point
+again (its folder holds a summary with a finished status), nor one that
+failed (the solver's reason is in the table; delete its folder to try it
+again), and goes on with an interrupted one (stopped by Ctrl-C or killed)
+from its last checkpoint (``tidens_rs.resume``).
+
+Points run in parallel worker processes (``workers``, one thread each), or
+on a Dask cluster (``scheduler``, the address of a ``dask.distributed``
+scheduler; every worker must have tidens installed and see ``out`` at the
+same path).
+"""
+
+from __future__ import annotations
+
+import csv
+import itertools
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterable, Sequence
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any
+
+from . import cells as cells_module
+from . import io
+from . import materials as presets
+from ._core import ConvergenceError, Material
+from .case import FINISHED, Case, resume
+from .result import MARK_DENSITIES
+
+TABLE_CSV = "sweep.csv"
+TABLE_PARQUET = "sweep.parquet"
+
+# The columns of the table, in order (times in s, errors relative).
+COLUMNS: tuple[str, ...] = (
+    "name",
+    "cell",
+    "material",
+    "stress_mpa",
+    "aspect_ratio",
+    "status",
+    "reason",
+    "final_density",
+    "final_time_s",
+    *(f"t_{m:g}_s" for m in MARK_DENSITIES),
+    *(f"error_{m:g}" for m in MARK_DENSITIES),
+    *(f"continuum_t_{m:g}_s" for m in MARK_DENSITIES),
+    "mesh_level",
+    "tolerance",
+    "element",
+    "steps",
+    "wall_seconds",
+    "folder",
+)
+
+
+@dataclass(frozen=True)
+class Point:
+    """One point of a sweep: its folder name, the values swept, and the
+    case (as :meth:`Case.as_dict`, so that it crosses to a worker)."""
+
+    name: str
+    cell: str
+    material: str
+    stress_mpa: float
+    aspect_ratio: float
+    case: dict[str, Any]
+
+
+def plan(
+    base: Case,
+    *,
+    stresses_mpa: Sequence[float] | None = None,
+    materials: Sequence[str | Material] | None = None,
+    cells: Sequence[str] | None = None,
+    aspect_ratios: Sequence[float] | None = None,
+) -> list[Point]:
+    """The points of a sweep: every combination of the lists given (a list
+    left out keeps the base case's value). Materials are preset names or
+    :class:`Material` objects; cells are preset names (``sc``, ``bcc``,
+    ``fcc``, ``sc2``; with a list of cells or aspect ratios the base case's
+    cell must be one of them too, rebuilt with each aspect ratio at the
+    default radius and size ratio)."""
+    base_aspect = cells_module.aspect_ratio_of(base.cell)
+    base_name = base.cell.name
+    stresses = _numbers("stresses_mpa", stresses_mpa, [base.stress_mpa])
+    aspects = _numbers("aspect_ratios", aspect_ratios, [base_aspect if base_aspect is not None else 1.0])
+    names = list(cells) if cells is not None else [base_name]
+    for name in names:
+        if name not in cells_module.CELL_NAMES:
+            raise ValueError(f"cells: {name!r} is not a preset cell (one of {', '.join(cells_module.CELL_NAMES)})")
+    if (cells is not None or aspect_ratios is not None) and base_name not in cells_module.CELL_NAMES and cells is None:
+        raise ValueError(f"aspect_ratios: the base cell {base_name!r} is not a preset, so it cannot be rebuilt with other aspect ratios")
+    laws: list[tuple[str, Material]] = []
+    for m in materials if materials is not None else [base.material]:
+        if isinstance(m, str):
+            laws.append((m, presets.by_name(m)))
+        elif isinstance(m, Material):
+            laws.append((presets.name_of(m) or f"C{m.creep_c:.4g}-n{m.creep_n:g}", m))
+        else:
+            raise TypeError(f"materials: {m!r} is neither a preset name nor a Material")
+    if not (stresses and aspects and names and laws):
+        raise ValueError("a sweep needs at least one value of each list it is given")
+    points = []
+    for cell_name, (law_name, law), stress, aspect in itertools.product(names, laws, stresses, aspects):
+        rebuild = cells is not None or aspect_ratios is not None
+        cell = cells_module.by_name(cell_name, cells_module.DEFAULT_RADIUS_MM, aspect) if rebuild else base.cell
+        case = replace(base, cell=cell, material=law, stress_mpa=stress)
+        name = f"{cell_name}-{law_name}-{stress:g}MPa-ca{aspect:g}"
+        points.append(Point(name, cell_name, law_name, float(stress), float(aspect), case.as_dict()))
+    if len({p.name for p in points}) != len(points):
+        raise ValueError("the sweep has repeated values: two points would share a folder")
+    return points
+
+
+def run(
+    base: Case,
+    out_dir: str | Path,
+    *,
+    until_density: float | None = None,
+    until_time_s: float | None = None,
+    stresses_mpa: Sequence[float] | None = None,
+    materials: Sequence[str | Material] | None = None,
+    cells: Sequence[str] | None = None,
+    aspect_ratios: Sequence[float] | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    error_estimate: bool = True,
+    progress: bool = False,
+    on_row: Callable[[dict[str, Any]], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Runs the sweep of :func:`plan` into ``out_dir`` and returns the table
+    (one row per point, keys :data:`COLUMNS`), also written to
+    ``out_dir/sweep.csv`` and ``out_dir/sweep.parquet``. ``workers``: worker
+    processes (default: the machine's cores, at most the number of points),
+    each running one point at a time on one thread; ``scheduler``: the
+    address of a Dask scheduler to run the points on instead. ``on_row`` is
+    called with each row as its point finishes."""
+    if until_density is None and until_time_s is None:
+        raise ValueError("give until_density, until_time_s or both")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
+        raise ValueError(f"workers = {workers!r}: must be a whole number >= 1")
+    if scheduler is not None and workers is not None:
+        raise ValueError("workers and scheduler exclude each other: the scheduler's cluster has its workers")
+    points = plan(base, stresses_mpa=stresses_mpa, materials=materials, cells=cells, aspect_ratios=aspect_ratios)
+    # Every point is checked in this process before any worker starts.
+    for p in points:
+        until_density, until_time_s = Case.from_dict(p.case)._check_stop(until_density, until_time_s)
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise FileExistsError(f"{out} is not a folder: give a folder for the sweep")
+    for p in points:
+        _check_folder(out / p.name, p, until_density, until_time_s)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as e:
+        raise io.output_error(out, e) from e
+    args = [(str(out), p, until_density, until_time_s, error_estimate) for p in points]
+    rows: dict[str, dict[str, Any]] = {}
+    bar = _progress(len(points)) if progress else None
+
+    def done(row: dict[str, Any]) -> None:
+        rows[row["name"]] = row
+        write_table(out, [rows[p.name] for p in points if p.name in rows])
+        if bar is not None:
+            bar.set_postfix_str(f"{row['name']}: {row['status']}")
+            bar.update(1)
+        if on_row is not None:
+            on_row(row)
+
+    try:
+        if scheduler is not None:
+            _run_on_dask(scheduler, args, done)
+        else:
+            n = min(workers or os.cpu_count() or 1, len(points))
+            if n == 1:
+                for a in args:
+                    done(run_point(*a))
+            else:
+                with ThreadPoolExecutor(max_workers=n) as pool:
+                    futures = [pool.submit(_run_in_process, *a) for a in args]
+                    for f in as_completed(futures):
+                        done(f.result())
+    finally:
+        if bar is not None:
+            bar.close()
+    return [rows[p.name] for p in points]
+
+
+def run_point(
+    out_dir: str,
+    point: Point,
+    until_density: float | None,
+    until_time_s: float | None,
+    error_estimate: bool,
+) -> dict[str, Any]:
+    """Runs one point into ``out_dir/point.name`` (in a worker): nothing if
+    the folder holds a finished run, a resume if it holds an interrupted
+    one, else the run afresh. Returns its row of the table."""
+    folder = Path(out_dir) / point.name
+    summary = _read_summary(folder)
+    t0 = time.perf_counter()
+    reason = ""
+    status = None if summary is None else summary.get("status")
+    started = (folder / "run.json").exists() and (folder / "checkpoint.bin").exists()
+    try:
+        if status in FINISHED or status == "failed":
+            reason = (summary or {}).get("message") or ""  # done earlier
+        elif started and status in (None, "interrupted"):
+            resume(folder)
+        else:
+            Case.from_dict(point.case).run(
+                until_density,
+                until_time_s,
+                out_dir=folder,
+                error_estimate=error_estimate,
+                overwrite=True,
+            )
+    except ConvergenceError as e:
+        reason = str(e)
+    summary = _read_summary(folder)
+    row: dict[str, Any] = {c: None for c in COLUMNS}
+    row.update(
+        name=point.name,
+        cell=point.cell,
+        material=point.material,
+        stress_mpa=point.stress_mpa,
+        aspect_ratio=point.aspect_ratio,
+        folder=str(folder),
+        reason=reason,
+    )
+    if summary is None:
+        row["status"] = "failed"
+        row["wall_seconds"] = time.perf_counter() - t0
+        return row
+    times = summary.get("times_to_density_s", {})
+    errors = (summary.get("error_estimate") or {}).get("relative", {})
+    model = summary.get("continuum_times_to_density_s", {})
+    for m in MARK_DENSITIES:
+        k = f"{m:g}"
+        row[f"t_{k}_s"] = times.get(k)
+        row[f"error_{k}"] = errors.get(k)
+        row[f"continuum_t_{k}_s"] = model.get(k)
+    for key in ("status", "final_density", "final_time_s", "mesh_level", "tolerance", "element", "steps", "wall_seconds"):
+        row[key] = summary.get(key)
+    return row
+
+
+def write_table(out_dir: Path, rows: Sequence[dict[str, Any]]) -> None:
+    """Writes the rows to ``sweep.csv`` and, where pyarrow is installed,
+    ``sweep.parquet`` in ``out_dir`` (each through a temporary file)."""
+
+    def write_csv(tmp: Path) -> None:
+        with tmp.open("w", newline="") as f:
+            w = csv.DictWriter(f, fieldnames=COLUMNS)
+            w.writeheader()
+            for r in rows:
+                w.writerow({k: "" if r.get(k) is None else r[k] for k in COLUMNS})
+
+    io.atomic_write(out_dir / TABLE_CSV, write_csv)
+    try:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+    except ImportError:
+        return
+    columns = {k: [r.get(k) for r in rows] for k in COLUMNS}
+    table = pa.table(columns)
+    io.atomic_write(out_dir / TABLE_PARQUET, lambda tmp: pq.write_table(table, tmp))
+
+
+def read_table(out_dir: str | Path) -> list[dict[str, Any]]:
+    """The rows of ``sweep.csv`` in ``out_dir``, numbers as floats (empty
+    cells as None)."""
+    with (Path(out_dir) / TABLE_CSV).open() as f:
+        return [{k: _value(v) for k, v in r.items()} for r in csv.DictReader(f)]
+
+
+def _value(text: str) -> Any:
+    if text == "":
+        return None
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def _check_folder(folder: Path, point: Point, until_density: float | None, until_time_s: float | None) -> None:
+    """Refuses a point folder that holds a run of another case or stop (a
+    restarted sweep must not take it for this point's)."""
+    try:
+        recorded = json.loads((folder / "run.json").read_text())
+    except FileNotFoundError:
+        return
+    except (OSError, ValueError) as e:
+        raise ValueError(f"{folder / 'run.json'}: not the record of a run ({e}); delete {folder} to run the point afresh") from e
+    same_case = _plain(recorded.get("case")) == _plain(point.case)
+    args = recorded.get("run", {})
+    same_stop = (args.get("until_density"), args.get("until_time_s")) == (until_density, until_time_s)
+    if not (same_case and same_stop):
+        what = "case" if not same_case else "stop (until_density, until_time_s)"
+        raise FileExistsError(f"{folder} holds a run of another {what}: give another folder for the sweep, or delete {folder}")
+
+
+def _plain(data: Any) -> Any:
+    """``data`` as the run's record holds it (JSON, tuples as lists,
+    non-finite numbers as the record writes them)."""
+    return json.loads(json.dumps(io._json_safe(data)))
+
+
+def _read_summary(folder: Path) -> dict[str, Any] | None:
+    try:
+        data = json.loads((folder / "summary.json").read_text())
+    except (OSError, ValueError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def _numbers(name: str, values: Sequence[float] | None, default: list[float]) -> list[float]:
+    if values is None:
+        return default
+    if isinstance(values, (str, bytes)) or not isinstance(values, Iterable):
+        raise TypeError(f"{name} = {values!r}: must be a list of numbers")
+    out = []
+    for i, v in enumerate(values):
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            raise TypeError(f"{name}[{i}] = {v!r}: must be a real number")
+        if not (math.isfinite(v) and v > 0):
+            raise ValueError(f"{name}[{i}] = {v!r}: must be finite and > 0")
+        out.append(float(v))
+    return out
+
+
+def _run_in_process(
+    out_dir: str,
+    point: Point,
+    until_density: float | None,
+    until_time_s: float | None,
+    error_estimate: bool,
+) -> dict[str, Any]:
+    """:func:`run_point` in a worker process of its own (``python -m
+    tidens_rs.sweep``, one solver thread: the workers share the machine's
+    cores), so that the caller's script needs no ``__main__`` guard and a
+    worker that dies takes no other point with it."""
+    job = {
+        "out_dir": out_dir,
+        "point": asdict(point),
+        "until_density": until_density,
+        "until_time_s": until_time_s,
+        "error_estimate": error_estimate,
+    }
+    env = dict(os.environ, RAYON_NUM_THREADS="1")
+    done = subprocess.run(
+        [sys.executable, "-m", "tidens_rs.sweep"],
+        input=json.dumps(io._json_safe(job)),
+        capture_output=True,
+        text=True,
+        env=env,
+        check=False,
+    )
+    lines = done.stdout.strip().splitlines()
+    if done.returncode == 0 and lines:
+        row: dict[str, Any] = json.loads(lines[-1])
+        return row
+    row = {c: None for c in COLUMNS}
+    tail = " ".join(done.stderr.strip().splitlines()[-3:])
+    row.update(
+        name=point.name,
+        cell=point.cell,
+        material=point.material,
+        stress_mpa=point.stress_mpa,
+        aspect_ratio=point.aspect_ratio,
+        folder=str(Path(out_dir) / point.name),
+        status="failed",
+        reason=f"worker exited with status {done.returncode}: {tail}",
+    )
+    return row
+
+
+def _worker_main() -> None:
+    """``python -m tidens_rs.sweep``: runs the point of the job read as JSON
+    from standard input and writes its row as JSON to standard output."""
+    job = json.loads(sys.stdin.read())
+    point = Point(**job["point"])
+    row = run_point(job["out_dir"], point, job["until_density"], job["until_time_s"], job["error_estimate"])
+    print(json.dumps(io._json_safe(row)))
+
+
+def _run_on_dask(address: str, args: list[tuple[Any, ...]], done: Callable[[dict[str, Any]], None]) -> None:
+    try:
+        from dask.distributed import Client, as_completed as dask_completed
+    except ImportError as e:
+        raise ImportError("scheduler needs dask.distributed: pip install 'tidens[sweep]'") from e
+    with Client(address) as client:  # type: ignore[no-untyped-call]
+        futures = [client.submit(run_point, *a, pure=False) for a in args]
+        for f in dask_completed(futures):  # type: ignore[no-untyped-call]
+            done(f.result())
+
+
+def _progress(total: int) -> Any:
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="point", file=sys.stderr)
+
+
+if __name__ == "__main__":
+    _worker_main()

@@ -1,0 +1,133 @@
+"""Sweeps: every point run once, in parallel worker processes or on a Dask
+cluster, into its own folder and one table; a restarted sweep skips the
+finished points and resumes an interrupted one."""
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import tidens_rs as td
+from tidens_rs import sweep
+from tidens_rs.cli import main
+
+QUICK = td.SolverSettings(mesh_level=1, tolerance=0.05, checkpoint_every=10)
+UNTIL = 0.75
+
+
+def base() -> td.Case:
+    return td.Case(cell=td.cells.sc(), material=td.materials.TI64_CREEP_1293K, stress_mpa=10.0, solver=QUICK)
+
+
+def times(rows: list[dict[str, Any]]) -> dict[str, float]:
+    return {r["name"]: r["t_0.7_s"] for r in rows}
+
+
+def test_every_point_runs_once_in_parallel_into_its_folder_and_the_table(tmp_path: Path) -> None:
+    rows = sweep.run(base(), tmp_path, until_density=UNTIL, stresses_mpa=[5.0, 10.0], cells=["sc", "bcc"], workers=2, error_estimate=False)
+    names = [r["name"] for r in rows]
+    assert names == ["sc-ti64-creep-1293k-5MPa-ca1", "sc-ti64-creep-1293k-10MPa-ca1", "bcc-ti64-creep-1293k-5MPa-ca1", "bcc-ti64-creep-1293k-10MPa-ca1"]
+    assert all(r["status"] == "reached_density" for r in rows)
+    for r in rows:
+        summary = json.loads((tmp_path / r["name"] / "summary.json").read_text())
+        assert summary["times_to_density_s"]["0.7"] == r["t_0.7_s"]
+        assert (summary["cell"]["name"], summary["load"]["stress_mpa"]) == (r["cell"], r["stress_mpa"])
+    # The table on disk, as CSV and as Parquet, is the one returned.
+    assert times(sweep.read_table(tmp_path)) == times(rows)
+    pq = pytest.importorskip("pyarrow.parquet")
+    table = pq.read_table(tmp_path / sweep.TABLE_PARQUET).to_pylist()
+    assert [r["name"] for r in table] == names and times(table) == times(rows)
+    # A worker process (one thread) gives what a run in this process gives,
+    # to the bit (results do not depend on the thread count).
+    direct = td.Case(cell=td.cells.bcc(), material=td.materials.TI64_CREEP_1293K, stress_mpa=5.0, solver=QUICK).run(until_density=UNTIL, error_estimate=False)
+    assert direct.time_to_density(0.7) == rows[2]["t_0.7_s"]
+    # Norton similarity between the stresses on sc, which reaches 0.7 long
+    # after the 1 s ramp: t_eff = t - n t_ramp / (n + 1) goes as sigma^-n, up
+    # to the elastic and contact compliance (well below 1 % here).
+    n = td.materials.TI64_CREEP_1293K.creep_n
+    t5, t10 = (next(r["t_0.7_s"] - n / (n + 1) for r in rows if r["cell"] == "sc" and r["stress_mpa"] == s) for s in (5.0, 10.0))
+    assert t5 / t10 == pytest.approx(2**n, rel=0.01)
+
+
+def test_a_restarted_sweep_resumes_an_interrupted_point_and_skips_finished_ones(tmp_path: Path) -> None:
+    point = sweep.plan(base())[0]
+    folder = tmp_path / point.name
+    # The point was interrupted (Ctrl-C) at step 25; its last checkpoint is step 20.
+    steps = 0
+
+    def stop(_: dict[str, float]) -> bool:
+        nonlocal steps
+        steps += 1
+        if steps == 25:
+            raise KeyboardInterrupt
+        return True
+
+    with pytest.raises(KeyboardInterrupt):
+        base().run(until_density=UNTIL, out_dir=folder, callback=stop, error_estimate=False)
+    assert json.loads((folder / "summary.json").read_text())["status"] == "interrupted"
+    [row] = sweep.run(base(), tmp_path, until_density=UNTIL, workers=1, error_estimate=False)
+    assert row["status"] == "reached_density"
+    # The resumed curve is the uninterrupted one, to the bit.
+    whole = base().run(until_density=UNTIL, out_dir=tmp_path / "whole", error_estimate=False)
+    resumed = np.loadtxt(folder / "curve.csv", delimiter=",", skiprows=1)
+    assert np.array_equal(resumed, np.loadtxt(tmp_path / "whole" / "curve.csv", delimiter=",", skiprows=1))
+    assert row["t_0.7_s"] == whole.time_to_density(0.7)
+    # Run again: the finished point is not run again.
+    stamp = (folder / "summary.json").stat().st_mtime_ns
+    [again] = sweep.run(base(), tmp_path, until_density=UNTIL, workers=1, error_estimate=False)
+    assert (folder / "summary.json").stat().st_mtime_ns == stamp and again["t_0.7_s"] == row["t_0.7_s"]
+    # A folder of another case is not taken for the point's.
+    with pytest.raises(FileExistsError, match=point.name):
+        sweep.run(base(), tmp_path, until_density=0.7, workers=1)
+
+
+def test_a_dask_cluster_of_two_workers_runs_the_same_sweep(tmp_path: Path) -> None:
+    distributed = pytest.importorskip("dask.distributed")
+    kwargs: dict[str, Any] = dict(until_density=UNTIL, stresses_mpa=[5.0, 10.0], cells=["sc", "bcc"], error_estimate=False)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, env={"RAYON_NUM_THREADS": "1"}) as cluster:
+        on_dask = sweep.run(base(), tmp_path / "dask", scheduler=cluster.scheduler_address, **kwargs)
+    local = sweep.run(base(), tmp_path / "local", workers=2, **kwargs)
+    assert times(on_dask) == times(local)
+    assert all(r["folder"].startswith(str(tmp_path / "dask")) for r in on_dask)
+
+
+def test_the_command_sweeps_and_names_bad_input(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out = tmp_path / "cli"
+    argv = ["sweep", "--stress", "5,10", "--cell", "sc", "--until-density", str(UNTIL), "--mesh-level", "1", "--tolerance", "0.05", "--no-error-estimate", "--quiet", "--out", str(out)]
+    assert main(argv) == 0
+    rows = sweep.read_table(out)
+    assert [r["stress_mpa"] for r in rows] == [5.0, 10.0] and all(r["status"] == "reached_density" for r in rows)
+    assert "sc-ti64-creep-1293k-10MPa-ca1" in capsys.readouterr().out
+    for bad, named in ((["--stress", "5,-1"], "stresses_mpa[1]"), (["--cell", "hcp"], "--cell"), (["--workers", "0"], "workers")):
+        args = list(argv)
+        flag = bad[0]
+        if flag in args:
+            i = args.index(flag)
+            args[i : i + 2] = bad
+        else:
+            args[1:1] = bad
+        with pytest.raises(SystemExit) as e:
+            main(args)
+        assert e.value.code == 2
+        assert named in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "named"),
+    [
+        ({"stresses_mpa": [10.0, math.nan]}, ValueError, "stresses_mpa[1]"),
+        ({"stresses_mpa": "10"}, TypeError, "stresses_mpa"),
+        ({"cells": ["hcp"]}, ValueError, "cells"),
+        ({"materials": [1.0]}, TypeError, "materials"),
+        ({"stresses_mpa": [10.0, 10.0]}, ValueError, "repeated"),
+        ({"workers": 0}, ValueError, "workers"),
+        ({"workers": 2, "scheduler": "tcp://x:1"}, ValueError, "scheduler"),
+    ],
+)
+def test_bad_sweeps_are_refused_before_any_point_runs(tmp_path: Path, kwargs: dict[str, Any], error: type[Exception], named: str) -> None:
+    with pytest.raises(error, match=named.replace("[", r"\[").replace("]", r"\]")):
+        sweep.run(base(), tmp_path / "x", until_density=UNTIL, **kwargs)
+    assert not (tmp_path / "x").exists()
