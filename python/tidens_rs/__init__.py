@@ -9,7 +9,7 @@ Units everywhere: mm, N, MPa, s. A run in a few lines::
     result.plot("density.png"); result.write_vtu("out/")
 """
 
-from . import cells, continuum, materials, sweep
+from . import cells, continuum, materials, similarity, sweep
 from ._core import (
     CONTACT_MODES,
     Cell,
@@ -47,5 +47,6 @@ __all__ = [
     "continuum",
     "materials",
     "resume",
+    "similarity",
     "sweep",
 ]
