@@ -10,7 +10,9 @@ n (with C scaled so that the creep rate at 10 MPa stays the base's), the
 coefficient C, the stress, E/sigma, nu, the aspect ratio c/a, the final
 density, a long hold. Per case it prints the status (or the refusal, with
 its reason), wall time and its ratio to the base case's, steps, Newton
-iterations, failed attempts, t(0.9), and the physical checks of
+iterations (and their ratio to the base case's, steadier than the wall
+time's when other jobs share the machine), failed attempts, t(0.9), and
+the physical checks of
 ``Result.checks()``: rho(t) monotone (to what Newton's tolerance leaves), no
 NaN, particle volume kept to the elastic part (|dV/V| against
 2 f sigma / (rho0 K), K the bulk modulus), the largest penetration within
@@ -158,15 +160,16 @@ def report(rows: list[dict[str, Any]]) -> None:
     for cell, rs in by_cell.items():
         base = next((r for r in rs if r["case"] == "base" and "wall_s" in r), None)
         print(f"\n{cell}")
-        print("| case | status | wall [s] | / base | steps | Newton | failed attempts | final rho | t(0.9) [s] | monotone | finite | |dV/V| (bound) | pen / R | physical |")
-        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+        print("| case | status | wall [s] | / base | steps | Newton | / base | failed attempts | final rho | t(0.9) [s] | monotone | finite | |dV/V| (bound) | pen / R | physical |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
         for r in rs:
             if r["status"] == "refused":
-                print(f"| {r['case']} | refused: {r['reason']} |" + " |" * 12)
+                print(f"| {r['case']} | refused: {r['reason']} |" + " |" * 13)
                 continue
             ratio = r["wall_s"] / base["wall_s"] if base else None
+            newton_ratio = r["newton"] / base["newton"] if base else None
             print(
-                f"| {r['case']} | {r['status']} | {fmt(r['wall_s'], '.1f')} | {fmt(ratio, '.2f')} | {r['steps']} | {r['newton']} | "
+                f"| {r['case']} | {r['status']} | {fmt(r['wall_s'], '.1f')} | {fmt(ratio, '.2f')} | {r['steps']} | {r['newton']} | {fmt(newton_ratio, '.2f')} | "
                 f"{r['failed_attempts']} | {fmt(r['final_density'], '.4f')} | {fmt(r['t09_s'])} | {fmt(r['monotone'])} | {fmt(r['finite'])} | "
                 f"{fmt(r['volume_change'], '.2e')} ({fmt(r['volume_bound'], '.1e')}) | {fmt(r['penetration_over_radius'], '.1e')} | {fmt(r['physical'])} |"
             )
@@ -178,8 +181,12 @@ def main() -> None:
     ap.add_argument("--level", type=int, default=td.DEFAULT_MESH_LEVEL)
     ap.add_argument("--only", nargs="+", help="groups to run (base, n, C, stress, E/sigma, nu, c/a, density, hold)")
     ap.add_argument("--timeout", type=float, default=600.0)
-    ap.add_argument("--save", type=Path)
+    ap.add_argument("--save", type=Path, help="the rows as JSON, written as they come")
+    ap.add_argument("--report-only", type=Path, metavar="JSON", help="no runs: the tables of rows saved with --save")
     args = ap.parse_args()
+    if args.report_only is not None:
+        report(json.loads(args.report_only.read_text()))
+        return
     rows = []
     for cell in args.cells:
         for v in variants():
