@@ -20,9 +20,11 @@ bounds the similarity error (it grows with the change of the stress; beyond
 the calibration it is scaled up by ``|s2 - s1| / |s_cal - s1|``). The
 mapped curve also differs from a run at the target stress by the two runs'
 time discretisations, whose step sequences differ: half the time tolerance
-is added for it (the time errors measured at a tolerance are a third of
-it or less). ``benches/similarity.py`` measures the estimate against full
-runs. A mapping without calibration has no error estimate (None).
+is added for it (the time errors measured at a tolerance after the ramp are
+a third of it or less; during a long ramp they can be larger: sc at 40 MPa
+with a 5 s ramp, tolerance 0.02, has t(0.55) 8 % short). ``benches/similarity.py``
+measures the estimate against full runs. A mapping without calibration has
+no error estimate (None).
 """
 
 from __future__ import annotations
