@@ -70,6 +70,9 @@ def test_cases_out_of_range_are_refused_before_the_run_with_the_reason() -> None
         td.Case(cell=td.cells.sc(), material=BASE.with_elastic(10.0, 0.3), stress_mpa=10.0)
     with pytest.raises(ValueError, match="creep_n \\(n\\) = 60: must be in \\[1, 50\\]"):
         td.materials.custom(1e-30, 60.0)
+    # Tiny and huge values are written as Python writes them, not as 0.000...
+    with pytest.raises(ValueError, match="creep_c \\(C\\) = 3.0285e-54: must be in \\[1e-30, 1e6\\]"):
+        td.materials.custom(3.0285e-54, 50.0)
     with pytest.raises(ValueError, match="poisson \\(nu\\) = 0.5"):
         BASE.with_elastic(BASE.young_mpa, 0.5)
 

@@ -20,7 +20,7 @@ from ._core import (
     UnsupportedError,
     __version__,
 )
-from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings, resume
+from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, Case, SolverSettings, load, resume
 from .continuum import ContinuumModel
 from .io import OutputError
 from .result import Result
@@ -45,6 +45,7 @@ __all__ = [
     "__version__",
     "cells",
     "continuum",
+    "load",
     "materials",
     "resume",
     "similarity",

@@ -687,6 +687,42 @@ def resume(
     return _finish(result, error, out)
 
 
+def load(out_dir: str | Path) -> Result:
+    """The result of the run whose outputs are in ``out_dir`` (its record
+    ``run.json``, ``curve.csv`` and ``summary.json``): the case, the curve,
+    the status, the cost and the error estimate, without the fields (read
+    those from the VTU files). Raises FileNotFoundError when the folder holds
+    no finished or stopped run, ValueError when its files are not a run's."""
+    out = _out_dir(out_dir)
+    if out is None:
+        raise TypeError("out_dir = None: give the folder of a run")
+    files = [out / RUN_FILE, out / "curve.csv", out / "summary.json"]
+    missing = [p.name for p in files if not p.exists()]
+    if missing:
+        raise FileNotFoundError(f"{out}: no run to load ({' and '.join(missing)} missing)")
+    try:
+        case = Case.from_dict(json.loads(files[0].read_text())["case"])
+        curve = io.read_curve(files[1])
+        summary = json.loads(files[2].read_text())
+        estimate = summary.get("error_estimate")
+        result = Result(
+            case=case,
+            curve=curve,
+            status=summary["status"],
+            wall_seconds=float(summary["wall_seconds"]),
+            stats=dict(summary.get("stats") or {}),
+            degrees_of_freedom=int(summary["degrees_of_freedom"]),
+            nodes=int(summary["nodes"]),
+            elements=int(summary["elements"]),
+            message=summary.get("message"),
+            error_estimate=ErrorEstimate(**estimate) if isinstance(estimate, dict) else None,
+            accuracy_search=summary.get("accuracy"),
+        )
+    except (ValueError, TypeError, KeyError) as e:
+        raise ValueError(f"{out}: not the outputs of a run ({type(e).__name__}: {e})") from e
+    return result
+
+
 def _complete_curve(writer: io.CurveWriter, curve: dict[str, Any], error: BaseException | None) -> BaseException | None:
     """Writes the rows of ``curve`` the streamed file lacks (a step that
     converged while Ctrl-C arrived, before its row was written) and closes

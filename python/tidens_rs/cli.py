@@ -431,6 +431,28 @@ def _sweep(args: argparse.Namespace) -> int:
     return 3 if failed else 0
 
 
+def _add_figures_options(p: argparse.ArgumentParser) -> None:
+    from . import figures
+
+    p.add_argument("--out", type=_folder, required=True, help="folder of the figures (PNG, PDF, captions.md, findings.md) and of their runs (runs/); a second call into it runs only what is missing")
+    p.add_argument("--level", type=int, default=2, help="mesh level of the runs, each at its accuracy-ladder tolerance 0.02 * 2^(3 - level) (default 2; the mesh study adds levels 1 to 3)")
+    p.add_argument("--only", type=_name_list(figures.FIGURES), default=list(figures.FIGURES), help=f"comma-separated figures among {', '.join(figures.FIGURES)} (default all)")
+    p.add_argument("--workers", type=int, help="worker processes, one run and one thread each (default: the cores)")
+    p.add_argument("--quiet", action="store_true", help="no progress")
+
+
+def _figures(args: argparse.Namespace) -> int:
+    from . import figures
+
+    say = (lambda _m: None) if args.quiet else (lambda m: print(m, flush=True))
+    made = figures.make(args.out, level=args.level, figures=args.only, workers=args.workers, log=say)
+    failed = [r["name"] for r in made.runs if r["status"] not in FINISHED]
+    for f in made.findings:
+        print(f"  {f['verdict']:>13}: {f['claim']}")
+    print(f"wrote {len(made.files)} files to {args.out} in {made.wall_seconds:.0f} s" + (f"; runs that did not finish: {', '.join(failed)}" if failed else ""))
+    return 3 if failed else 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="tidens", description="Powder-level FE of hot pressing of titanium powders (units: mm, N, MPa, s).")
     parser.add_argument("--version", action="version", version=f"tidens {__version__}")
@@ -444,6 +466,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_sweep_options(sweep_parser)
     model = sub.add_parser("continuum", help="the closed-form continuum model's curve (Eqs. 2 and 3 of the paper) for a material, stress and rho0")
     _add_continuum_options(model)
+    figures_parser = sub.add_parser("figures", help="the paper's studies: run them and draw the figures with their errors, captions and the findings checked")
+    _add_figures_options(figures_parser)
     return parser
 
 
@@ -465,6 +489,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _continuum(args)
         if args.command == "sweep":
             return _sweep(args)
+        if args.command == "figures":
+            return _figures(args)
         return _run(args)
     except (ValueError, TypeError, FileExistsError, UnsupportedError) as e:
         parser.error(str(e))

@@ -9,7 +9,13 @@ ramp of length ``t_r`` to the full stress ``s = f sigma``,
                        t_eff = t - n t_r / (n+1)          (t >= t_r),
 
 so a curve computed at ``s1`` (ramp ``t_r1``) gives the curve at ``s2``
-(ramp ``t_r2``) by ``t_eff2 = t_eff1 (s1 / s2)^n``, at no cost.
+(ramp ``t_r2``) by ``t_eff2 = t_eff1 (s1 / s2)^n``, at no cost. The creep
+coefficient C enters only through ``C tau`` (the same material at another
+temperature, C1 -> C2, with the same n): ``t_eff2 = t_eff1 (C1 s1^n) /
+(C2 s2^n)``; with elasticity this is exact but for the ramp (a change of C
+is a change of the time unit), and its error is estimated as that of the
+change of stress with the same effect on the rate, ``s2 (C2 / C1)^(1/n)``,
+which over-estimates it.
 
 The mapping is exact but for what breaks the similarity: elasticity (the
 elastic strains scale with s / E, not with tau) and the compliance of the
@@ -76,8 +82,9 @@ class MappedCurve:
 
     ``time_s`` and ``rel_density`` are the mapped curve; ``stress_mpa``,
     ``knockdown`` and ``ramp_time_s`` its load; ``source_stress_mpa`` the
-    stress of the computed curve. ``relative_error`` is the estimated
-    relative error of t(rho) at the mark densities reached (keys as in
+    stress of the computed curve; ``creep_c`` the creep coefficient mapped
+    to. ``relative_error`` is the estimated relative error of t(rho) at the
+    mark densities reached (keys as in
     ``times_to_density_s``), ``error`` the largest of them (None without a
     calibration curve, see :mod:`tidens_rs.similarity`)."""
 
@@ -87,6 +94,7 @@ class MappedCurve:
     knockdown: float
     ramp_time_s: float
     source_stress_mpa: float
+    creep_c: float
     relative_error: dict[str, float]
     error: float | None
 
@@ -102,11 +110,14 @@ def map_curve(
     *,
     knockdown: float | None = None,
     ramp_time_s: float | None = None,
+    creep_c: float | None = None,
     calibration: Result | None = None,
     accuracy: float | None = None,
 ) -> MappedCurve:
     """The curve of ``source`` mapped to the stress ``stress_mpa`` [MPa]
-    (and ``knockdown``, ``ramp_time_s``: default the source's). With
+    (and ``knockdown``, ``ramp_time_s``, the creep coefficient ``creep_c``
+    [MPa^-n s^-1] of the material at another temperature: default the
+    source's). With
     ``calibration``, a run of the same case at another stress, the mapping's
     error is estimated (see the module docstring); with ``accuracy`` (a
     relative error of t(rho)) the mapping is refused (ValueError) where that
@@ -121,12 +132,16 @@ def map_curve(
         raise ValueError(f"stress_mpa = {stress_mpa!r}, knockdown = {knockdown!r}: the stress the cell feels must be > 0")
     if not (np.isfinite(tr2) and tr2 >= 0.0):
         raise ValueError(f"ramp_time_s = {ramp_time_s!r}: must be >= 0 s")
-    t_eff = effective_time(source.time_s, n, case.ramp_time_s) * np.exp(n * np.log(s1 / s2))
+    c1 = case.material.creep_c
+    c2 = c1 if creep_c is None else float(creep_c)
+    if not (np.isfinite(c2) and c2 > 0.0):
+        raise ValueError(f"creep_c = {creep_c!r}: must be > 0 MPa^-n s^-1")
+    t_eff = effective_time(source.time_s, n, case.ramp_time_s) * np.exp(n * np.log(s1 / s2) + np.log(c1 / c2))
     time_s = real_time(t_eff, n, tr2)
     relative: dict[str, float] = {}
     error: float | None = None
     if calibration is not None:
-        relative = _calibrated_error(source, calibration, s2)
+        relative = _calibrated_error(source, calibration, s2 * (c2 / c1) ** (1.0 / n))
         error = max(relative.values()) if relative else None
     if accuracy is not None:
         if error is None:
@@ -143,6 +158,7 @@ def map_curve(
         knockdown=f2,
         ramp_time_s=tr2,
         source_stress_mpa=case.stress_mpa,
+        creep_c=c2,
         relative_error=relative,
         error=error,
     )
@@ -150,7 +166,8 @@ def map_curve(
 
 def _calibrated_error(source: Result, calibration: Result, s2: float) -> dict[str, float]:
     """The relative error of each mark density's time when ``source`` is
-    mapped to the stress ``s2`` [MPa, f sigma]: the mismatch between
+    mapped to the stress ``s2`` [MPa, f sigma] (the equivalent stress of a
+    change of C): the mismatch between
     ``calibration`` and ``source`` mapped to it, scaled by the change of
     the stress."""
     cal = calibration.case

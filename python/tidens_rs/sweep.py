@@ -83,6 +83,8 @@ class Point:
     stress_mpa: float
     aspect_ratio: float
     case: dict[str, Any]
+    # Densities at which the run writes its fields (VTU snapshots).
+    snapshot_densities: tuple[float, ...] = ()
 
 
 def plan(
@@ -154,16 +156,48 @@ def run(
     each running one point at a time on one thread; ``scheduler``: the
     address of a Dask scheduler to run the points on instead. ``on_row`` is
     called with each row as its point finishes."""
+    points = plan(base, stresses_mpa=stresses_mpa, materials=materials, cells=cells, aspect_ratios=aspect_ratios)
+    return execute(
+        points,
+        out_dir,
+        until_density=until_density,
+        until_time_s=until_time_s,
+        workers=workers,
+        scheduler=scheduler,
+        error_estimate=error_estimate,
+        progress=progress,
+        on_row=on_row,
+    )
+
+
+def execute(
+    points: Sequence[Point],
+    out_dir: str | Path,
+    *,
+    until_density: float | None = None,
+    until_time_s: float | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    error_estimate: bool = True,
+    progress: bool = False,
+    on_row: Callable[[dict[str, Any]], None] | None = None,
+) -> list[dict[str, Any]]:
+    """Runs ``points`` (from :func:`plan`, or made otherwise: any cases, each
+    with a folder name of its own) into ``out_dir`` as :func:`run` does, in
+    the order given (put the longest first to keep the workers busy)."""
     if until_density is None and until_time_s is None:
         raise ValueError("give until_density, until_time_s or both")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers = {workers!r}: must be a whole number >= 1")
     if scheduler is not None and workers is not None:
         raise ValueError("workers and scheduler exclude each other: the scheduler's cluster has its workers")
-    points = plan(base, stresses_mpa=stresses_mpa, materials=materials, cells=cells, aspect_ratios=aspect_ratios)
+    if len({p.name for p in points}) != len(points):
+        raise ValueError("points: two points share a name, so they would share a folder")
     # Every point is checked in this process before any worker starts.
     for p in points:
-        until_density, until_time_s = Case.from_dict(p.case)._check_stop(until_density, until_time_s)
+        case = Case.from_dict(p.case)
+        until_density, until_time_s = case._check_stop(until_density, until_time_s)
+        case._check_densities("snapshot_densities", p.snapshot_densities)
     out = Path(out_dir)
     if out.exists() and not out.is_dir():
         raise FileExistsError(f"{out} is not a folder: give a folder for the sweep")
@@ -231,6 +265,7 @@ def run_point(
                 until_density,
                 until_time_s,
                 out_dir=folder,
+                snapshot_densities=point.snapshot_densities,
                 error_estimate=error_estimate,
                 overwrite=True,
             )
@@ -398,7 +433,8 @@ def _worker_main() -> None:
     """``python -m tidens_rs.sweep``: runs the point of the job read as JSON
     from standard input and writes its row as JSON to standard output."""
     job = json.loads(sys.stdin.read())
-    point = Point(**job["point"])
+    fields = job["point"]
+    point = Point(**{**fields, "snapshot_densities": tuple(fields.get("snapshot_densities", ()))})
     row = run_point(job["out_dir"], point, job["until_density"], job["until_time_s"], job["error_estimate"])
     print(json.dumps(io._json_safe(row)))
 

@@ -1,6 +1,6 @@
 //! `Cell`: the unit cell of a particle packing that a simulation presses.
 
-use crate::errors::{Phase, parameter_error, solver_error};
+use crate::errors::{Number, Phase, parameter_error, solver_error};
 use pyo3::prelude::*;
 use tidens_solver::{Cell, Octant, SolverError};
 
@@ -42,7 +42,7 @@ fn octant_error(err: SolverError, name: &str, lengths: [f64; 3], octants: &[Octa
                 allowed,
             }) => Some(parameter_error(
                 &format!("octants[{k}].{name}"),
-                value,
+                Number(value),
                 &allowed,
             )),
             _ => None,

@@ -89,6 +89,23 @@ pub(crate) fn parameter_error(
     PyValueError::new_err(message)
 }
 
+/// A real number as Python's `repr` writes it: the shortest digits that
+/// read back to it, in exponent form below 1e-4 and from 1e16 on (plain
+/// `{}` would write C = 3e-54 with 53 zeros).
+pub(crate) struct Number(pub f64);
+
+impl std::fmt::Display for Number {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = self.0;
+        let a = v.abs();
+        if v.is_finite() && a != 0.0 && !(1e-4..1e16).contains(&a) {
+            write!(f, "{v:e}")
+        } else {
+            write!(f, "{v}")
+        }
+    }
+}
+
 /// `ValueError` for an out-of-range mesh level.
 pub(crate) fn mesh_level_error(level: impl std::fmt::Display) -> PyErr {
     parameter_error(
@@ -106,7 +123,7 @@ pub(crate) fn material_error(err: MaterialError, phase: Phase) -> PyErr {
             name,
             value,
             allowed,
-        } => parameter_error(name, value, allowed),
+        } => parameter_error(name, Number(value), allowed),
         MaterialError::UnknownPreset(..) => PyValueError::new_err(err.to_string()),
         MaterialError::Inverted { .. } => match phase {
             Phase::Setup => PyValueError::new_err(err.to_string()),
@@ -122,7 +139,7 @@ pub(crate) fn solver_error(err: SolverError, phase: Phase) -> PyErr {
             name,
             value,
             ref allowed,
-        } => parameter_error(name, value, allowed),
+        } => parameter_error(name, Number(value), allowed),
         SolverError::Material(e) => material_error(e, phase),
         SolverError::Mesh(MeshError::Level(level)) => mesh_level_error(level),
         SolverError::Mesh(e) => PyValueError::new_err(e.to_string()),

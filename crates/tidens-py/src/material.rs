@@ -1,6 +1,6 @@
 //! `Material`: the constitutive law, and the creep-coefficient helper.
 
-use crate::errors::{Phase, material_error, parameter_error};
+use crate::errors::{Number, Phase, material_error, parameter_error};
 use pyo3::prelude::*;
 use tidens_material::{Material, Preset};
 
@@ -92,7 +92,7 @@ impl PyMaterial {
     /// Steady creep rate C q^n [1/s] at the von Mises stress q_mpa [MPa] (>= 0).
     fn creep_rate(&self, q_mpa: f64) -> PyResult<f64> {
         if !(q_mpa >= 0.0) {
-            return Err(parameter_error("q_mpa", q_mpa, ">= 0 MPa"));
+            return Err(parameter_error("q_mpa", Number(q_mpa), ">= 0 MPa"));
         }
         Ok(self.inner.creep_rate(q_mpa))
     }

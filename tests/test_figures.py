@@ -1,0 +1,128 @@
+"""The studies behind `tidens figures`: the rate read off a curve, the
+surface drawn, Norton similarity in C, results loaded back from their
+folders, and one figure made end to end on a coarse mesh."""
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import tidens_rs as td
+from tidens_rs import figures
+
+BASE = td.materials.TI64_CREEP_1293K
+
+
+def test_the_rate_read_off_a_curve_is_the_rate_that_made_it() -> None:
+    # rho_dot = A exp(b rho): t(rho) = (exp(-b rho0) - exp(-b rho)) / (A b).
+    a, b, rho0 = 2e-3, 9.0, 0.52
+    rho = np.linspace(rho0, 0.97, 4001)
+    t = (np.exp(-b * rho0) - np.exp(-b * rho)) / (a * b)
+    grid = np.linspace(0.55, 0.95, 161)
+    rate = figures.densification_rate(t, rho, grid)
+    # Second-order differences on a grid of h = 0.0025: relative error
+    # (b h)^2 / 6 = 8.4e-5 inside, (b h)^2 / 3 = 1.7e-4 at the two ends.
+    err = np.abs(rate / (a * np.exp(b * grid)) - 1.0)
+    assert np.max(err[1:-1]) < 1e-4 and np.max(err) < 2e-4
+    slope, intercept, deviation = figures.log_rate_fit(grid, rate)
+    assert slope == pytest.approx(b / math.log(10.0), rel=1e-5)
+    assert intercept == pytest.approx(math.log10(a), abs=1e-4)  # the 8.4e-5 relative error: 3.7e-5 decades
+    assert deviation < 1e-4
+    # Outside the curve there is no rate.
+    assert np.isnan(figures.densification_rate(t, rho, np.array([0.5, 0.51, 0.98, 0.99]))).all()
+
+
+def _block(nx: int, ny: int, nz: int) -> tuple[np.ndarray, np.ndarray]:
+    def node(i: int, j: int, k: int) -> int:
+        return i + (nx + 1) * (j + (ny + 1) * k)
+
+    points = np.array([[i, j, k] for k in range(nz + 1) for j in range(ny + 1) for i in range(nx + 1)], dtype=float)
+    cells = [
+        [node(i, j, k), node(i + 1, j, k), node(i + 1, j + 1, k), node(i, j + 1, k),
+         node(i, j, k + 1), node(i + 1, j, k + 1), node(i + 1, j + 1, k + 1), node(i, j + 1, k + 1)]
+        for k in range(nz) for j in range(ny) for i in range(nx)
+    ]
+    return points, np.array(cells)
+
+
+def test_the_surface_drawn_is_the_boundary_facing_out() -> None:
+    points, cells = _block(2, 3, 4)
+    faces, owner = figures.boundary_faces(cells)
+    assert len(faces) == 2 * (2 * 3 + 3 * 4 + 4 * 2)
+    for f, e in zip(faces, owner):
+        p = points[f]
+        normal = np.cross(p[2] - p[0], p[3] - p[1])
+        assert np.dot(normal, p.mean(axis=0) - points[cells[e]].mean(axis=0)) > 0
+        # Every boundary face lies on a side of the block's box.
+        flat = [axis for axis in range(3) if np.all(p[:, axis] == p[0, axis]) and p[0, axis] in (0.0, (2, 3, 4)[axis])]
+        assert len(flat) == 1
+    # A closed surface: the outward area vectors sum to zero.
+    total = sum(np.cross(points[f][2] - points[f][0], points[f][3] - points[f][1]) for f in faces)
+    assert np.allclose(total, 0.0)
+
+
+def press(material: td.Material, stress: float = 10.0, out: Path | None = None) -> td.Result:
+    case = td.Case(cell=td.cells.sc(), material=material, stress_mpa=stress,
+                   solver=td.SolverSettings(mesh_level=1, tolerance=0.01))
+    return case.run(0.9, out_dir=out, error_estimate=False)
+
+
+def test_norton_similarity_in_c_maps_one_temperature_to_another() -> None:
+    # The same n at another temperature: C 30 times larger is a time unit
+    # 30 times shorter (but for the 1 s ramp, which t_eff accounts for).
+    hot = td.materials.custom(30.0 * BASE.creep_c, BASE.creep_n)
+    src, truth = press(BASE), press(hot)
+    m = td.similarity.map_curve(src, 10.0, creep_c=hot.creep_c)
+    assert m.creep_c == hot.creep_c
+    for rho in (0.7, 0.8, 0.9):
+        mapped, computed = m.time_to_density(rho), truth.time_to_density(rho)
+        assert mapped is not None and computed is not None
+        assert abs(mapped / computed - 1.0) < 0.02, (rho, mapped, computed)
+    # Mapping C and stress together composes: C x 30 at 10 MPa equals
+    # C x 1 at 10 * 30^(1/n) MPa.
+    s_eq = 10.0 * 30.0 ** (1.0 / BASE.creep_n)
+    by_stress = td.similarity.map_curve(src, s_eq, ramp_time_s=1.0)
+    by_c = td.similarity.map_curve(src, 10.0, creep_c=hot.creep_c)
+    late = src.time_s > 2.0
+    assert np.allclose(by_stress.time_s[late], by_c.time_s[late], rtol=1e-12)
+    with pytest.raises(ValueError, match="creep_c"):
+        td.similarity.map_curve(src, 10.0, creep_c=-1.0)
+
+
+def test_a_result_loaded_from_its_folder_is_the_run(tmp_path: Path) -> None:
+    case = td.Case(cell=td.cells.sc(), material=BASE, stress_mpa=10.0, solver=td.SolverSettings(mesh_level=2, tolerance=0.04))
+    r = case.run(0.85, out_dir=tmp_path / "run")
+    back = td.load(tmp_path / "run")
+    assert back.case.as_dict() == r.case.as_dict() and back.status == r.status
+    assert np.allclose(back.time_s, r.time_s, rtol=1e-12, atol=0) and np.array_equal(back.rel_density, r.rel_density)
+    assert back.estimate() == r.estimate()
+    assert back.summary()["times_to_density_s"] == pytest.approx(r.summary()["times_to_density_s"], rel=1e-12)
+    with pytest.raises(FileNotFoundError, match="no run to load"):
+        td.load(tmp_path)
+    (tmp_path / "bad").mkdir()
+    for name in ("run.json", "curve.csv", "summary.json"):
+        (tmp_path / "bad" / name).write_text("{}")
+    with pytest.raises(ValueError, match="not the outputs of a run"):
+        td.load(tmp_path / "bad")
+
+
+def test_the_aspect_ratio_figure_end_to_end(tmp_path: Path) -> None:
+    made = figures.make(tmp_path, level=1, figures=["aspect_ratio"], workers=1)
+    names = {p.name for p in made.files}
+    assert {"aspect_ratio.png", "aspect_ratio.pdf", "captions.md", "findings.md"} <= names
+    assert (tmp_path / "aspect_ratio.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert len(made.runs) == 6 and all(r["status"] == "reached_density" for r in made.runs)
+    # The findings quote the runs' own times to rho = 0.9, and tying the
+    # particle to the planes slows it at every aspect ratio.
+    t9 = {(round(r["aspect_ratio"], 9), r["name"].endswith("-tied-L1")): r["t_0.9_s"] for r in made.runs}
+    for k in figures.ASPECT_RATIOS:
+        assert t9[(k, True)] > t9[(k, False)]
+    text = (tmp_path / "findings.md").read_text()
+    for (k, tied), t in t9.items():
+        assert f"{t:.4g}" in text
+    # A second call runs nothing again.
+    again = figures.make(tmp_path, level=1, figures=["aspect_ratio"], workers=1)
+    stamps = {r["name"]: json.loads((Path(r["folder"]) / "summary.json").read_text())["wall_seconds"] for r in again.runs}
+    assert stamps == {r["name"]: r["wall_seconds"] for r in made.runs}
