@@ -17,7 +17,8 @@ into the same folder runs only what is missing) and draws, as PNG and PDF:
   with frictionless mirror planes (the model) and with particles tied to
   the planes (the sensitivity option that blocks their spreading);
 - ``master_curve``: log densification rate against density at 5 to 40 MPa
-  (sc, bcc and fcc), and the same divided by sigma^n;
+  (sc with mirror and with tied planes, bcc, fcc), and the same divided by
+  sigma^n;
 - ``contours``: von Mises stress on the deformed particles of each cell at
   rho = 0.8, 0.9 and 0.95;
 - ``mesh_study``: sc and bcc at mesh levels 1, 2 and 3, with the estimated
@@ -73,7 +74,8 @@ TI64_STRESSES_MPA: tuple[float, ...] = (5.0, 10.0, 15.0, 20.0)
 # Computed Ti-6Al-4V stresses; the others are mapped from the nearer one.
 TI64_COMPUTED_MPA: tuple[float, float] = (5.0, 20.0)
 MASTER_STRESSES_MPA: tuple[float, ...] = (5.0, 10.0, 20.0, 40.0)
-MASTER_CELLS: tuple[str, ...] = ("sc", "bcc", "fcc")
+# (cell, particle tied to the planes): sc also with the paper's walls.
+MASTER_ROWS: tuple[tuple[str, bool], ...] = (("sc", False), ("sc", True), ("bcc", False), ("fcc", False))
 ASPECT_RATIOS: tuple[float, ...] = (0.8, 1.0, 1.2)
 ASPECT_STRESS_MPA = 15.0
 STUDY_CELLS: tuple[str, ...] = ("sc", "bcc")
@@ -211,9 +213,9 @@ def plan(level: int = 2, figures: Sequence[str] = FIGURES) -> Runs:
                 for tied in (False, True):
                     runs.want("sc", CREEP, ASPECT_STRESS_MPA, aspect=k, tied_planes=tied)
         elif fig == "master_curve":
-            for cell in MASTER_CELLS:
+            for cell, tied in MASTER_ROWS:
                 for s in MASTER_STRESSES_MPA:
-                    runs.want(cell, CREEP, s)
+                    runs.want(cell, CREEP, s, tied_planes=tied)
         elif fig == "mesh_study":
             for cell in STUDY_CELLS:
                 for lvl in STUDY_LEVELS:
@@ -562,18 +564,24 @@ def _ti64_findings(times: dict[tuple[str, str, float], dict[float, float | None]
             t9["sc"] > t9["bcc"] and t9["sc"] > t9["fcc"],  # type: ignore[operator]
             "t(0.9), creep at 20 MPa: " + ", ".join(f"{CELL_LABELS[c]} {t9[c]:.3g} s" for c in CELLS if t9[c] is not None),
         ))
-        model = {c: ContinuumModel(creep_c=computed_runs[(c, CREEP, 20.0)].case.material.creep_c, creep_n=computed_runs[(c, CREEP, 20.0)].case.material.creep_n,
-                                   stress_mpa=20.0, knockdown=1.0, ramp_time_s=1.0, rho0=computed_runs[(c, CREEP, 20.0)].case.cell.rho0).time_to_density([0.9])[0]
-                 for c in ("bcc", "fcc") if (c, CREEP, 20.0) in computed_runs}
-        model_ratio = f"{model['bcc'] / model['fcc']:.2f}" if len(model) == 2 else "-"
+        b_run, f_run = computed_runs.get(("bcc", CREEP, 20.0)), computed_runs.get(("fcc", CREEP, 20.0))
+        model_ratio = rate_ratio = "-"
+        if b_run is not None and f_run is not None:
+            tm = [continuum_curve(x, until=0.9) for x in (b_run, f_run)]
+            model_ratio = f"{tm[0][0][-1] / tm[1][0][-1]:.2f}"
+            g = np.array([0.85, 0.9])
+            rr = densification_rate(f_run.time_s, f_run.rel_density, np.array([0.84, 0.85, 0.86, 0.89, 0.9, 0.91]))
+            rb = densification_rate(b_run.time_s, b_run.rel_density, np.array([0.84, 0.85, 0.86, 0.89, 0.9, 0.91]))
+            rate_ratio = ", ".join(f"{x:.2f} at rho = {d:g}" for x, d in zip((rr / rb)[[1, 4]], g))
         out.append(_finding(
             "The bcc-fcc difference is small",
             abs(t9["bcc"] / t9["fcc"] - 1.0) < 0.25,  # type: ignore[operator]
-            f"t(0.9) bcc/fcc = {t9['bcc'] / t9['fcc']:.2f} (creep, 20 MPa), the continuum model's {model_ratio} (it sees only "  # type: ignore[operator]
-            "rho0). bcc starts at rho0 = 0.680 with 8 neighbours per particle, fcc at 0.740 with 12: fcc has less "
-            "porosity to close and carries the load on more necks, four of them in the plane normal to the "
-            "load; bcc's particles touch only along the body diagonals until they meet their second "
-            "neighbours across the faces of the cell, where its rate falls steeply (master_curve)",
+            f"t(0.9) bcc/fcc = {t9['bcc'] / t9['fcc']:.2f} (creep, 20 MPa), the continuum model's {model_ratio} "  # type: ignore[operator]
+            f"(it sees only rho0: 0.680 against 0.740). Both reach rho = 0.8 in about the same time (bcc "
+            f"{_seconds(t('bcc', CREEP, 20.0, 0.8))}, fcc {_seconds(t('fcc', CREEP, 20.0, 0.8))}); beyond, at equal density "
+            f"fcc densifies faster: its rate over bcc's {rate_ratio}. fcc carries the load on 12 necks per "
+            "particle (4 of them in the plane normal to the load), bcc on 8 along the body diagonals, "
+            "joined by its second neighbours across the cell faces only near rho = 0.78",
         ))
     return out
 
@@ -647,6 +655,7 @@ def _cpti(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str, Any]]]
 def _aspect_ratio(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str, Any]]]:
     fig, axes = _figure(1, 2, width=5.0)
     t9: dict[tuple[float, bool], float | None] = {}
+    err9: dict[tuple[float, bool], float | None] = {}
     for j, tied in enumerate((False, True)):
         ax = axes[0][j]
         for k, ratio in enumerate(ASPECT_RATIOS):
@@ -655,6 +664,7 @@ def _aspect_ratio(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str
                 continue
             _plot(ax, computed(r), f"C{k}", f"c/a = {ratio:g}")
             t9[(ratio, tied)] = r.time_to_density(0.9)
+            err9[(ratio, tied)] = r.estimate().relative.get("0.9")
         _density_axes(ax, "sc, Ti-6Al-4V creep, 15 MPa, " + ("particle tied to the planes" if tied else "frictionless mirror planes"))
         ax.legend(fontsize=8, loc="upper left")
     files = _save(fig, out, "aspect_ratio")
@@ -673,25 +683,28 @@ def _aspect_ratio(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str
             return max(ASPECT_RATIOS, key=lambda k_: vals[(k_, tied)])
 
         evidence = "t(0.9) [s], mirror / tied: " + ", ".join(
-            f"c/a {k_:g} {vals[(k_, False)]:.4g} / {vals[(k_, True)]:.4g}" for k_ in ASPECT_RATIOS)
+            f"c/a {k_:g} {vals[(k_, False)]:.4g} / {vals[(k_, True)]:.4g}" for k_ in ASPECT_RATIOS) + (
+            " (their estimated errors " + ", ".join(f"{_pct(err9.get((k_, False)))} / {_pct(err9.get((k_, True)))}" for k_ in ASPECT_RATIOS)
+            + ")")
         found.append(_finding("c/a = 0.8 is clearly slower than 1 and 1.2 (frictionless mirror planes)", slowest(False) == 0.8, evidence))
         found.append(_finding("c/a = 0.8 is clearly slower than 1 and 1.2 (particle tied to the planes)", slowest(True) == 0.8, evidence))
     return files, caption, found
 
 
 def _master_curve(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str, Any]]]:
-    fig, axes = _figure(len(MASTER_CELLS), 2, width=5.0)
+    fig, axes = _figure(len(MASTER_ROWS), 2, width=5.0)
     # Rates over 0.02 of density (central differences on a grid of 0.01):
     # finer, they resolve the single steps of the time integration.
     grid = np.round(np.arange(0.5, UNTIL_DENSITY + 1e-9, 0.01), 10)
     found = []
     notes = []
-    for i, cell in enumerate(MASTER_CELLS):
+    for i, (cell, tied) in enumerate(MASTER_ROWS):
+        label = CELL_LABELS[cell] + (", tied planes" if tied else "")
         slopes, normalised = {}, {}
         after_ramp = RATE_WINDOW[0]
         n = presets.by_name(CREEP).creep_n
         for k, s in enumerate(MASTER_STRESSES_MPA):
-            r = runs.result(job_name(cell, CREEP, s, level=runs.level))
+            r = runs.result(job_name(cell, CREEP, s, tied_planes=tied, level=runs.level))
             if r is None:
                 continue
             rate = densification_rate(r.time_s, r.rel_density, grid)
@@ -710,8 +723,8 @@ def _master_curve(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str
             ax.grid(True, alpha=0.3, which="both")
             ax.axvspan(*RATE_WINDOW, color="0.9", zorder=0)
             ax.legend(fontsize=8)
-        axes[i][0].set_title(f"{CELL_LABELS[cell]}, Ti-6Al-4V creep (n = {n:g})", fontsize=10)
-        axes[i][1].set_title(f"{CELL_LABELS[cell]}: master curve", fontsize=10)
+        axes[i][0].set_title(f"{label}, Ti-6Al-4V creep (n = {n:g})", fontsize=10)
+        axes[i][1].set_title(f"{label}: master curve", fontsize=10)
         if len(normalised) < 2:
             continue
         stack = np.log(np.vstack(list(normalised.values())))
@@ -721,13 +734,13 @@ def _master_curve(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str
         dev = stack[:, sel] - stack[:, sel].mean(axis=0)
         rms, worst = float(np.expm1(np.sqrt(np.mean(dev**2)))), float(np.expm1(np.max(np.abs(dev))))
         lo, hi = float(grid[sel][0]), float(grid[sel][-1])
-        notes.append(f"{CELL_LABELS[cell]}: the normalised rates scatter by {_pct(rms)} rms ({_pct(worst)} at most) over rho = {lo:.2f}-{hi:.2f}")
+        notes.append(f"{label}: the normalised rates scatter by {_pct(rms)} rms ({_pct(worst)} at most) over rho = {lo:.2f}-{hi:.2f}")
         b = [v[0] for v in slopes.values()]
         dev_line = max(v[2] for v in slopes.values())
         start = max(RATE_WINDOW[0], min(float(grid[np.isfinite(v)][0]) for v in normalised.values()))
         span = abs(float(np.mean(b))) * (RATE_WINDOW[1] - start)
         found.append(_finding(
-            f"Log rate is linear in density from about 0.6 to 0.9 with one slope for 5-40 MPa ({CELL_LABELS[cell]})",
+            f"Log rate is linear in density from about 0.6 to 0.9 with one slope for 5-40 MPa ({label})",
             dev_line < 0.1 * span and (max(b) - min(b)) < 0.1 * abs(float(np.mean(b))),
             f"slopes d log10(rate)/d rho over {start:.2f}-{RATE_WINDOW[1]} (rate at the full stress, the ramp's "
             "divided out): "
@@ -736,7 +749,7 @@ def _master_curve(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str
             "(linear: within a tenth of it, slopes within a tenth of their mean)",
         ))
         found.append(_finding(
-            f"Rate over sigma^n collapses onto one curve ({CELL_LABELS[cell]})",
+            f"Rate over sigma^n collapses onto one curve ({label})",
             rms <= 0.05,
             f"the normalised rates of {', '.join(f'{s:g}' for s in normalised)} MPa scatter about their mean by "
             f"{_pct(rms)} rms, {_pct(worst)} at most, over rho = {lo:.2f}-{hi:.2f} (the densities every run passes "
@@ -745,7 +758,7 @@ def _master_curve(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str
     files = _save(fig, out, "master_curve")
     caption = (
         "## master_curve\n\nDensification rate d rho/dt against density (log scale) for Ti-6Al-4V creep at "
-        f"{', '.join(f'{s:g}' for s in MASTER_STRESSES_MPA)} MPa on the sc, bcc and fcc cells (computed, mesh level "
+        f"{', '.join(f'{s:g}' for s in MASTER_STRESSES_MPA)} MPa on the sc cell (with mirror planes and with the particle tied to them), bcc and fcc (computed, mesh level "
         f"{runs.level}); right, the same divided by sigma^n (n = 2.8), sigma the stress applied when the "
         "density was passed (during the 1 s ramp, less than the nominal one): the master curve. The rate is "
         "the slope of t(rho) over 0.02 of density; the first 0.02 above rho0 (the ramp's elastic and "
