@@ -79,7 +79,8 @@ def test_norton_similarity_in_c_maps_one_temperature_to_another() -> None:
     for rho in (0.7, 0.8, 0.9):
         mapped, computed = m.time_to_density(rho), truth.time_to_density(rho)
         assert mapped is not None and computed is not None
-        assert abs(mapped / computed - 1.0) < 0.02, (rho, mapped, computed)
+        # Observed: 3e-4 at most (the two runs step differently).
+        assert abs(mapped / computed - 1.0) < 5e-3, (rho, mapped, computed)
     # Mapping C and stress together composes: C x 30 at 10 MPa equals
     # C x 1 at 10 * 30^(1/n) MPa.
     s_eq = 10.0 * 30.0 ** (1.0 / BASE.creep_n)
