@@ -155,3 +155,73 @@ fn each_surface_pair_keeps_its_own_multiplier() {
     c.restore(&before);
     assert_eq!(c.evaluate(&x, false), eval);
 }
+
+/// A ridge: facet A over x in [-1, 0] on the plane z = x / 5, facet B over
+/// x in [0, 1] on z = -x / 5 (outward normal up), y in [0, 1]; and a small
+/// slave quad facing down with its centre at `at`. Nodes, and the
+/// surfaces ridge, slave.
+fn ridge(at: [f64; 3]) -> (Vec<[f64; 3]>, Vec<ContactSurface>) {
+    let mut nodes = Vec::new();
+    for y in [0.0, 1.0] {
+        for x in [-1.0, 0.0, 1.0] {
+            nodes.push([x, y, -0.2 * f64::abs(x)]);
+        }
+    }
+    // Counter-clockwise seen from above: the outward normal is up.
+    let ridge = vec![[0, 1, 4, 3], [1, 2, 5, 4]];
+    let h = 0.01;
+    for (dx, dy) in [(-h, -h), (-h, h), (h, h), (h, -h)] {
+        nodes.push([at[0] + dx, at[1] + dy, at[2]]);
+    }
+    // Clockwise seen from above: the outward normal is down.
+    let slave = vec![[6, 7, 8, 9]];
+    let surfaces = [ridge, slave]
+        .iter()
+        .map(|quads| ContactSurface::from_quads(quads, &nodes).unwrap())
+        .collect();
+    (nodes, surfaces)
+}
+
+#[test]
+fn a_node_that_slid_off_its_facet_is_paired_afresh_at_convergence() {
+    // Paired on facet A just above it, the slave then slides over the
+    // ridge and ends below facet B's plane z = -x / 5, where A's plane
+    // carried on would have it deep inside (0.2 mm) and pressing hard.
+    let (nodes, surfaces) = ridge([-0.5, 0.5, -0.099]);
+    let x0: Vec<f64> = nodes.iter().flatten().copied().collect();
+    let mut c = contact(surfaces);
+    c.pair(&x0);
+    let slave_terms = |eval: &tidens_contact::ContactEvaluation| -> Vec<(usize, usize, f64)> {
+        eval.terms
+            .iter()
+            .filter(|t| t.slave.0 == 1)
+            .map(|t| (t.slave.1, t.master.1, t.penetration))
+            .collect()
+    };
+    let before = slave_terms(&c.evaluate(&x0, false));
+    assert!(
+        !before.is_empty() && before.iter().all(|&(_, f, _)| f == 0),
+        "{before:?}"
+    );
+    let mut x = x0.clone();
+    for k in 6..10 {
+        x[3 * k] += 1.0;
+        x[3 * k + 2] = -0.12;
+    }
+    // Kept on A, the nodes are measured on A's plane carried past the ridge.
+    let kept = slave_terms(&c.evaluate(&x, false));
+    assert!(kept.iter().all(|&(_, f, _)| f == 0), "{kept:?}");
+    // Paired afresh: all four touch B, each inside it by (-x / 5 - z) cos(atan 0.2).
+    assert!(kept.iter().all(|&(_, _, p)| p > 0.19), "{kept:?}");
+    assert_eq!(c.repair(&x), 4);
+    let after = slave_terms(&c.evaluate(&x, false));
+    assert_eq!(after.len(), 4, "{after:?}");
+    for (k, f, p) in after {
+        let node = c.surfaces()[1].nodes[k];
+        let depth = (-0.2 * x[3 * node] - x[3 * node + 2]) / 1.04f64.sqrt();
+        assert_eq!(f, 1, "node {k} on facet {f}");
+        assert!((p - depth).abs() < 1e-12, "node {k}: {p} against {depth}");
+    }
+    // Nothing left to pair afresh: the next repair finds no new link.
+    assert_eq!(c.repair(&x), 0);
+}

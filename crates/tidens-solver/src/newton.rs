@@ -312,8 +312,9 @@ impl Simulation {
                         iterations,
                     ));
                 }
-                // Nodes that came near another particle during the step are
-                // paired now; if any of them touches, Newton goes on.
+                // Nodes that came near another particle, or slid off their
+                // facet, during the step are paired afresh now; if any of
+                // them touches, Newton goes on.
                 if self.pair_contacts(&u, true) > 0 {
                     eval = self
                         .evaluate(&u, dt, false)
@@ -441,16 +442,17 @@ impl Simulation {
 
     /// Pairs the surface nodes with master facets at displacement `u`: all
     /// of them at the start of a step (keeping the facets of the last step
-    /// where they still fit), or only those not paired yet (`unpaired_only`,
-    /// at convergence). Returns how many newly paired nodes touch.
-    fn pair_contacts(&mut self, u: &[f64], unpaired_only: bool) -> usize {
+    /// where they still fit), or at convergence (`at_convergence`) those not
+    /// paired yet and those that left their facet. Returns how many newly
+    /// paired nodes touch.
+    fn pair_contacts(&mut self, u: &[f64], at_convergence: bool) -> usize {
         if self.contact.is_none() {
             return 0;
         }
         let t0 = std::time::Instant::now();
         let x = self.current_coordinates(u);
         let touching = match self.contact.as_mut() {
-            Some(c) if unpaired_only => c.pair_unpaired(&x),
+            Some(c) if at_convergence => c.repair(&x),
             Some(c) => {
                 c.pair(&x);
                 0
