@@ -369,8 +369,26 @@ impl ParticleContact {
     /// its facet's extended patch was found 7e-3 mm, 15 % of the radius,
     /// inside the facet it had moved over once paired with it).
     pub fn repair(&mut self, x: &[f64]) -> usize {
+        let before = self.pairing.clone();
         self.drop_left(x);
-        self.pair_unpaired(x)
+        self.pair_unpaired(x);
+        // Only a link to another facet is new: a node near a convex edge can
+        // have its nearest facet's patch project it beyond the margin, and
+        // paired again with the same facet it must not count (Newton would
+        // go on at the same state for ever).
+        let mut touching = 0;
+        for (s, nodes) in self.pairing.iter().enumerate() {
+            for (k, links) in nodes.iter().enumerate() {
+                for &(m, f) in links {
+                    if !before[s][k].contains(&(m, f))
+                        && self.node_term(x, s, k, m, f, false).is_some()
+                    {
+                        touching += 1;
+                    }
+                }
+            }
+        }
+        touching
     }
 
     /// Drops the links whose node has left its facet grown by
