@@ -363,11 +363,11 @@ impl ParticleContact {
     /// are made afresh, and every node is paired with the surfaces within
     /// reach it was not paired with. Returns how many of the new links
     /// touch or press: if any, the state was found with facets that no
-    /// longer hold the node, and Newton must go on (a node of an elongated
-    /// particle can slide past its facet within a step; measured on the
-    /// sc2 cell of spheroids c/a = 5 at level 3, where a node so carried on
-    /// its facet's extended patch was found 7e-3 mm, 15 % of the radius,
-    /// inside the facet it had moved over once paired with it).
+    /// longer hold the node, and Newton must go on. A node that slides past
+    /// its facet within a step is otherwise measured on that facet's patch
+    /// carried beyond its edge, which past a convex ridge puts it deep
+    /// inside (or far off) the surface it is really on; the step that
+    /// follows would start from that state with the true penetration.
     pub fn repair(&mut self, x: &[f64]) -> usize {
         let before = self.pairing.clone();
         self.drop_left(x);
