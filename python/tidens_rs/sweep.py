@@ -272,16 +272,7 @@ def run_point(
     except ConvergenceError as e:
         reason = str(e)
     summary = _read_summary(folder)
-    row: dict[str, Any] = {c: None for c in COLUMNS}
-    row.update(
-        name=point.name,
-        cell=point.cell,
-        material=point.material,
-        stress_mpa=point.stress_mpa,
-        aspect_ratio=point.aspect_ratio,
-        folder=str(folder),
-        reason=reason,
-    )
+    row = _point_row(point, folder, reason)
     if summary is None:
         row["status"] = "failed"
         row["wall_seconds"] = time.perf_counter() - t0
@@ -414,17 +405,23 @@ def _run_in_process(
     if done.returncode == 0 and lines:
         row: dict[str, Any] = json.loads(lines[-1])
         return row
-    row = {c: None for c in COLUMNS}
     tail = " ".join(done.stderr.strip().splitlines()[-3:])
+    row = _point_row(point, Path(out_dir) / point.name, f"worker exited with status {done.returncode}: {tail}")
+    row["status"] = "failed"
+    return row
+
+
+def _point_row(point: Point, folder: Path, reason: str) -> dict[str, Any]:
+    """A table row holding what the point itself says (the rest None)."""
+    row: dict[str, Any] = {c: None for c in COLUMNS}
     row.update(
         name=point.name,
         cell=point.cell,
         material=point.material,
         stress_mpa=point.stress_mpa,
         aspect_ratio=point.aspect_ratio,
-        folder=str(Path(out_dir) / point.name),
-        status="failed",
-        reason=f"worker exited with status {done.returncode}: {tail}",
+        folder=str(folder),
+        reason=reason,
     )
     return row
 

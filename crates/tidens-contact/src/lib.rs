@@ -28,7 +28,9 @@
 //!   penetration is below its tolerance.
 //! - within a step each node keeps the facets it was paired with at the
 //!   step's start ([`ParticleContact::pair`]), so the residual stays smooth
-//!   while Newton iterates.
+//!   while Newton iterates; at convergence the nodes that slid off their
+//!   facet or came near another surface are paired afresh
+//!   ([`ParticleContact::repair`]), and Newton goes on if one touches.
 
 mod error;
 pub mod facet;

@@ -100,22 +100,6 @@ fn debug_link_changes(
     prev: &mut Vec<(ContactLink, f64, f64, [f64; 2])>,
     contact: &ContactEvaluation,
 ) {
-    let now: Vec<(ContactLink, f64, f64, [f64; 2])> = contact
-        .terms
-        .iter()
-        .filter(|t| t.pressure > 0.0)
-        .map(|t| {
-            (
-                ContactLink {
-                    slave: t.slave,
-                    master: t.master,
-                },
-                t.pressure,
-                t.penetration,
-                t.location,
-            )
-        })
-        .collect();
     let all: Vec<(ContactLink, f64, f64, [f64; 2])> = contact
         .terms
         .iter()
@@ -131,6 +115,8 @@ fn debug_link_changes(
             )
         })
         .collect();
+    let now: Vec<(ContactLink, f64, f64, [f64; 2])> =
+        all.iter().filter(|a| a.1 > 0.0).cloned().collect();
     for n in &now {
         if !prev.iter().any(|p| p.0 == n.0) {
             eprintln!(
