@@ -1,5 +1,7 @@
 //! Pairing: a slave node near two master surfaces (in the pocket where two
-//! particles meet) is held off both, each with its own multiplier.
+//! particles meet) is held off both, each with its own multiplier; a node
+//! that slid off its facet is paired afresh; near a slender tip a node is
+//! measured on its own side of it, and beyond the tip on no face.
 
 use tidens_contact::{ContactMode, ContactSettings, ContactSurface, ParticleContact};
 
@@ -224,4 +226,89 @@ fn a_node_that_slid_off_its_facet_is_paired_afresh_at_convergence() {
     }
     // Nothing left to pair afresh: the next repair finds no new link.
     assert_eq!(c.repair(&x), 0);
+}
+
+/// A thin wedge, the tip of a slender particle: its upper face A (one quad,
+/// x in [0, 1], on z = 0, outward normal up) and its lower face B (two
+/// quads, x in [0, 0.5] and [0.5, 1], on z = -0.1 (1 - x), outward normal
+/// down) meet along the tip x = 1; y in [0, 1]. And a small slave quad
+/// facing down with its centre at `at`. Nodes, and the surfaces wedge,
+/// slave.
+fn wedge(at: [f64; 3]) -> (Vec<[f64; 3]>, Vec<ContactSurface>) {
+    let lower = |x: f64| -0.1 * (1.0 - x);
+    let mut nodes = vec![
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, 0.0],
+    ];
+    for x in [0.0, 0.5] {
+        nodes.push([x, 0.0, lower(x)]);
+        nodes.push([x, 1.0, lower(x)]);
+    }
+    // Counter-clockwise about the outward normal: A seen from above, B
+    // from below.
+    let wedge = vec![[0, 1, 2, 3], [4, 5, 7, 6], [6, 7, 2, 1]];
+    let h = 0.01;
+    for (dx, dy) in [(-h, -h), (-h, h), (h, h), (h, -h)] {
+        nodes.push([at[0] + dx, at[1] + dy, at[2]]);
+    }
+    let slave = vec![[8, 9, 10, 11]];
+    let surfaces = [wedge, slave]
+        .iter()
+        .map(|quads| ContactSurface::from_quads(quads, &nodes).unwrap())
+        .collect();
+    (nodes, surfaces)
+}
+
+fn wedge_terms(at: [f64; 3], search_distance: f64) -> Vec<(usize, f64)> {
+    let (nodes, surfaces) = wedge(at);
+    let x: Vec<f64> = nodes.iter().flatten().copied().collect();
+    let mut c = ParticleContact::new(
+        surfaces,
+        ContactSettings {
+            mode: ContactMode::Frictionless,
+            penalty: 100.0,
+            search_distance,
+            curvature_stiffness: false,
+            touch_stiffness_cap: f64::INFINITY,
+        },
+    )
+    .unwrap();
+    c.pair(&x);
+    c.evaluate(&x, false)
+        .terms
+        .iter()
+        .filter(|t| t.slave.0 == 1)
+        .map(|t| (t.master.1, t.penetration))
+        .collect()
+}
+
+#[test]
+fn a_node_near_a_slender_tip_is_measured_on_its_own_side() {
+    // 1e-3 mm into the upper face, 0.75 along the wedge: the quad of the
+    // lower face around x = 0.75, which shares the tip's nodes with A,
+    // has the node's projection at its centre (A: at three quarters of
+    // its half-width) but lies 0.024 mm away, on the other side of the
+    // tip; measured on it, the node would be 0.024 mm deep.
+    let terms = wedge_terms([0.75, 0.5, -1e-3], 0.05);
+    assert_eq!(terms.len(), 4, "{terms:?}");
+    for (facet, depth) in terms {
+        assert_eq!(facet, 0, "paired across the tip");
+        assert!((depth - 1e-3).abs() < 1e-12, "{depth}");
+    }
+}
+
+#[test]
+fn a_node_beyond_a_tip_is_not_measured_on_a_face_carried_past_it() {
+    // Beyond the tip (x = 1.08) and below the upper face's plane: outside
+    // the wedge, 0.08 mm from its tip. Upper face A carried past its edge
+    // would read the node 0.01 mm deep; its projection falls 0.16 of the
+    // half-width beyond A's edge (and 0.32 beyond the lower quad's).
+    let terms = wedge_terms([1.08, 0.5, -0.01], 0.2);
+    assert!(terms.is_empty(), "{terms:?}");
+    // Just past the edge (within a tenth of the half-width) the node keeps
+    // its facet: an edge's own nodes are measured on it.
+    let terms = wedge_terms([1.02, 0.5, -0.001], 0.2);
+    assert!(terms.iter().all(|&(f, d)| f == 0 && (d - 1e-3).abs() < 1e-12), "{terms:?}");
 }

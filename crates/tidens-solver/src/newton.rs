@@ -238,6 +238,22 @@ impl Simulation {
         }
         // Particle contact keeps each node's master facet for the whole step.
         self.pair_contacts(&u, false);
+        if debug_enabled()
+            && let Some(c) = &self.contact
+        {
+            let deepest = |x: &[f64]| {
+                c.evaluate(x, false)
+                    .terms
+                    .into_iter()
+                    .max_by(|a, b| a.penetration.total_cmp(&b.penetration))
+                    .map(|t| (t.penetration, t.slave, t.master, t.location))
+            };
+            eprintln!(
+                "    pairs: deepest at the last state {:?}, at the predictor {:?}",
+                deepest(&self.current_coordinates(&self.state.u)),
+                deepest(&self.current_coordinates(&u))
+            );
+        }
         // The viscous part of the tangent scales with the step: a factor
         // from a step of another size contracts slowly, so the tangent is
         // computed at the predictor right away.
@@ -379,7 +395,9 @@ impl Simulation {
             self.stats.linear_seconds += t0.elapsed().as_secs_f64();
             solved.map_err(|e| fail(e.into(), iterations))?;
             let r0_sq: f64 = r.iter().map(|x| x * x).sum();
-            let best = line_search::backtrack(r0_sq, tol, |s| {
+            let slope = |rt: &[f64]| -> f64 { rt.iter().zip(&du).map(|(a, b)| a * b).sum() };
+            let g0 = slope(&r);
+            let best = line_search::along_energy(g0, r0_sq, tol, |s| {
                 let mut ut = u.clone();
                 for d in 0..n {
                     if map[d] == d {
@@ -401,6 +419,7 @@ impl Simulation {
                 Some((
                     norm_sq,
                     max_abs(&rt),
+                    slope(&rt),
                     TrialPoint {
                         u: ut,
                         piston: pt,

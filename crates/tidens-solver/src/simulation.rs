@@ -368,10 +368,21 @@ impl Simulation {
     }
 
     /// The step to try next: the controller's proposal, shortened to land on
-    /// time targets and not to overshoot the target density by much.
+    /// time targets and not to overshoot the target density by much. Without
+    /// a target density, a packing whose pores are closing aims between
+    /// [`FULL_DENSITY`](crate::output::FULL_DENSITY) and 1: at the rate of
+    /// the last step, where the faceted surfaces still press into each other
+    /// at full density, a doubled step would end beyond 1 (bcc at level 1
+    /// held at 10 MPa: from 0.99964 to 1.00018 in one step of 1800 s).
     fn propose_dt(&self) -> f64 {
         let mut dt = self.control.dt_next().min(self.settings.dt_max);
-        if let (Some(target), Some(rate)) = (self.settings.until_density, self.density_rate()) {
+        let full = crate::output::FULL_DENSITY;
+        let closing = self.curve.first().is_some_and(|p| p.rel_density < full);
+        let target = self
+            .settings
+            .until_density
+            .or_else(|| closing.then_some(0.5 * (full + 1.0)));
+        if let (Some(target), Some(rate)) = (target, self.density_rate()) {
             let rho = self.rel_density();
             if rate > 0.0 && rho + rate * dt > target {
                 dt = dt
