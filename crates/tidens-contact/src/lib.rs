@@ -319,15 +319,14 @@ impl ParticleContact {
     /// search distance) are candidates: near the tip of a slender spheroid
     /// the quads around the pole also take in the far side, onto which the
     /// node projects well inside, and read as deep as the tip is thick
-    /// (measured on the sc2 cell of c/a = 5 at level 2: a node in contact
-    /// read 1.6e-2 mm deep, the next step's Newton could not remove it,
-    /// and the run stalled at a step of 4e-14 s).
+    /// (measured on the sc2 cell of c/a = 5 at level 2: paired afresh, a
+    /// node in contact read 1.6e-2 mm deep on the far side's quad).
     ///
     /// None if even the chosen quad's projection lies beyond its edges (by
     /// more than [`KEEP_FACET_MARGIN`]): the node then faces a ridge or
     /// corner of the master, where no quad's patch measures it (carried past
     /// its edge, a patch read a node of the same cell 3.1e-3 mm deep at
-    /// xi = (1.52, -1.20), and Newton failed at every step size). The
+    /// xi = (1.52, -1.20), and the step was cut to 2e-5 s). The
     /// ridge's own nodes are held off the node's surface by the other pass.
     fn nearest(
         &self,

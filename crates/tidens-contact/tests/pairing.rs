@@ -310,5 +310,10 @@ fn a_node_beyond_a_tip_is_not_measured_on_a_face_carried_past_it() {
     // Just past the edge (within a tenth of the half-width) the node keeps
     // its facet: an edge's own nodes are measured on it.
     let terms = wedge_terms([1.02, 0.5, -0.001], 0.2);
-    assert!(terms.iter().all(|&(f, d)| f == 0 && (d - 1e-3).abs() < 1e-12), "{terms:?}");
+    assert!(
+        terms
+            .iter()
+            .all(|&(f, d)| f == 0 && (d - 1e-3).abs() < 1e-12),
+        "{terms:?}"
+    );
 }

@@ -395,9 +395,7 @@ impl Simulation {
             self.stats.linear_seconds += t0.elapsed().as_secs_f64();
             solved.map_err(|e| fail(e.into(), iterations))?;
             let r0_sq: f64 = r.iter().map(|x| x * x).sum();
-            let slope = |rt: &[f64]| -> f64 { rt.iter().zip(&du).map(|(a, b)| a * b).sum() };
-            let g0 = slope(&r);
-            let best = line_search::along_energy(g0, r0_sq, tol, |s| {
+            let best = line_search::backtrack(r0_sq, tol, |s| {
                 let mut ut = u.clone();
                 for d in 0..n {
                     if map[d] == d {
@@ -419,7 +417,6 @@ impl Simulation {
                 Some((
                     norm_sq,
                     max_abs(&rt),
-                    slope(&rt),
                     TrialPoint {
                         u: ut,
                         piston: pt,

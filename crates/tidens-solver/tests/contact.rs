@@ -226,8 +226,7 @@ fn contact_force_balances(element: ElementKind) {
         assert!((planes[2] + piston).abs() <= 1e-5 * piston);
         steps += 1;
     }
-    // Checked at each step of the run: 9 with tetrahedra, more with hexahedra.
-    assert!(steps >= 5, "{steps} steps");
+    assert!(steps > 10);
     assert!(
         worst < 1e-5,
         "contact force off the piston force by {worst:e} (relative)"
