@@ -55,17 +55,41 @@ fn pocket() -> (Vec<[f64; 3]>, Vec<ContactSurface>) {
 }
 
 fn contact(surfaces: Vec<ContactSurface>) -> ParticleContact {
+    contact_within(surfaces, 0.05)
+}
+
+fn contact_within(surfaces: Vec<ContactSurface>, search_distance: f64) -> ParticleContact {
     ParticleContact::new(
         surfaces,
         ContactSettings {
             mode: ContactMode::Frictionless,
             penalty: 100.0,
-            search_distance: 0.05,
+            search_distance,
             curvature_stiffness: false,
             touch_stiffness_cap: f64::INFINITY,
         },
     )
     .unwrap()
+}
+
+/// Adds a slave quad of half-width 0.01 facing down with its centre at
+/// `at`, and returns the master `quads` and it as two surfaces.
+fn with_slave_below(
+    nodes: &mut Vec<[f64; 3]>,
+    quads: Vec<[usize; 4]>,
+    at: [f64; 3],
+) -> Vec<ContactSurface> {
+    let first = nodes.len();
+    let h = 0.01;
+    for (dx, dy) in [(-h, -h), (-h, h), (h, h), (h, -h)] {
+        nodes.push([at[0] + dx, at[1] + dy, at[2]]);
+    }
+    // Clockwise seen from above: the outward normal is down.
+    let slave = vec![[first, first + 1, first + 2, first + 3]];
+    [quads, slave]
+        .iter()
+        .map(|q| ContactSurface::from_quads(q, nodes).unwrap())
+        .collect()
 }
 
 #[test]
@@ -171,16 +195,7 @@ fn ridge(at: [f64; 3]) -> (Vec<[f64; 3]>, Vec<ContactSurface>) {
     }
     // Counter-clockwise seen from above: the outward normal is up.
     let ridge = vec![[0, 1, 4, 3], [1, 2, 5, 4]];
-    let h = 0.01;
-    for (dx, dy) in [(-h, -h), (-h, h), (h, h), (h, -h)] {
-        nodes.push([at[0] + dx, at[1] + dy, at[2]]);
-    }
-    // Clockwise seen from above: the outward normal is down.
-    let slave = vec![[6, 7, 8, 9]];
-    let surfaces = [ridge, slave]
-        .iter()
-        .map(|quads| ContactSurface::from_quads(quads, &nodes).unwrap())
-        .collect();
+    let surfaces = with_slave_below(&mut nodes, ridge, at);
     (nodes, surfaces)
 }
 
@@ -249,32 +264,14 @@ fn wedge(at: [f64; 3]) -> (Vec<[f64; 3]>, Vec<ContactSurface>) {
     // Counter-clockwise about the outward normal: A seen from above, B
     // from below.
     let wedge = vec![[0, 1, 2, 3], [4, 5, 7, 6], [6, 7, 2, 1]];
-    let h = 0.01;
-    for (dx, dy) in [(-h, -h), (-h, h), (h, h), (h, -h)] {
-        nodes.push([at[0] + dx, at[1] + dy, at[2]]);
-    }
-    let slave = vec![[8, 9, 10, 11]];
-    let surfaces = [wedge, slave]
-        .iter()
-        .map(|quads| ContactSurface::from_quads(quads, &nodes).unwrap())
-        .collect();
+    let surfaces = with_slave_below(&mut nodes, wedge, at);
     (nodes, surfaces)
 }
 
 fn wedge_terms(at: [f64; 3], search_distance: f64) -> Vec<(usize, f64)> {
     let (nodes, surfaces) = wedge(at);
     let x: Vec<f64> = nodes.iter().flatten().copied().collect();
-    let mut c = ParticleContact::new(
-        surfaces,
-        ContactSettings {
-            mode: ContactMode::Frictionless,
-            penalty: 100.0,
-            search_distance,
-            curvature_stiffness: false,
-            touch_stiffness_cap: f64::INFINITY,
-        },
-    )
-    .unwrap();
+    let mut c = contact_within(surfaces, search_distance);
     c.pair(&x);
     c.evaluate(&x, false)
         .terms
