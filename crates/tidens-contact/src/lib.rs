@@ -408,6 +408,20 @@ impl ParticleContact {
                     if !before[s][k].contains(&(m, f))
                         && self.node_term(x, s, k, m, f, false).is_some()
                     {
+                        if std::env::var_os("TIDENS_DEBUG").is_some() {
+                            let olds: Vec<_> = before[s][k]
+                                .iter()
+                                .map(|&(om, of)| ((om, of), self.measure(x, s, k, om, of)))
+                                .collect();
+                            eprintln!(
+                                "      repair: node {:?} at {:?} new facet {:?} measured {:?}; before {:?}",
+                                (s, k),
+                                point(x, self.surfaces[s].nodes[k]),
+                                (m, f),
+                                self.measure(x, s, k, m, f),
+                                olds
+                            );
+                        }
                         touching += 1;
                     }
                 }
@@ -416,17 +430,24 @@ impl ParticleContact {
         touching
     }
 
+    /// Facet parameters and penetration \[mm\] of slave node `k` of surface
+    /// `s` measured on facet `f` of surface `m` (its patch extended beyond
+    /// its edges if need be), in the configuration `x`.
+    pub fn measure(&self, x: &[f64], s: usize, k: usize, m: usize, f: usize) -> ([f64; 2], f64) {
+        let kind = self.surfaces[m].kind;
+        let p = point(x, self.surfaces[s].nodes[k]);
+        let q = self.surfaces[m].facets[f].map(|n| point(x, n));
+        let xi = facet::project_on(kind, &p, &q);
+        (xi, facet::penetration_on(kind, &p, &q, xi))
+    }
+
     /// Drops the links whose node has left its facet grown by
     /// [`KEEP_FACET_MARGIN`] or gone beyond the search distance.
     fn drop_left(&mut self, x: &[f64]) {
         let keep = |s: usize, k: usize, m: usize, f: usize| {
-            let kind = self.surfaces[m].kind;
-            let p = point(x, self.surfaces[s].nodes[k]);
-            let q = self.surfaces[m].facets[f].map(|n| point(x, n));
-            let xi = facet::project_on(kind, &p, &q);
-            let inside = facet::outside(kind, xi) <= KEEP_FACET_MARGIN;
-            let near = facet::penetration_on(kind, &p, &q, xi) > -self.settings.search_distance;
-            inside && near
+            let (xi, penetration) = self.measure(x, s, k, m, f);
+            facet::outside(self.surfaces[m].kind, xi) <= KEEP_FACET_MARGIN
+                && penetration > -self.settings.search_distance
         };
         let pairing: Vec<Vec<NodePairing>> = self
             .pairing

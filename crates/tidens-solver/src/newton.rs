@@ -99,6 +99,7 @@ fn max_abs(v: &[f64]) -> f64 {
 fn debug_link_changes(
     prev: &mut Vec<(ContactLink, f64, f64, [f64; 2])>,
     contact: &ContactEvaluation,
+    measure: impl Fn(ContactLink) -> ([f64; 2], f64),
 ) {
     let all: Vec<(ContactLink, f64, f64, [f64; 2])> = contact
         .terms
@@ -129,10 +130,11 @@ fn debug_link_changes(
         if !now.iter().any(|n| n.0 == p.0) {
             let there = all.iter().find(|a| a.0.slave == p.0.slave);
             eprintln!(
-                "      - released {:?} (was p {:.3e}) now {:?}",
+                "      - released {:?} (was p {:.3e}) now {:?}, measured on the facet {:?}",
                 p.0,
                 p.1,
-                there.map(|a| (a.0.master, a.1, a.2, a.3))
+                there.map(|a| (a.0.master, a.1, a.2, a.3)),
+                measure(p.0)
             );
         }
     }
@@ -184,6 +186,24 @@ impl Simulation {
         }
         self.constraints.enforce(&mut u, piston);
         (u, piston)
+    }
+
+    /// Prints the largest body entry of a Newton direction `du`, its node's
+    /// position at `u`, and the piston's entry (debugging output,
+    /// `TIDENS_DEBUG`).
+    fn debug_direction(&self, u: &[f64], du: &[f64], map: &[usize]) {
+        let n = self.constraints.dof_count();
+        let (big, at) = (0..n)
+            .filter(|&d| map[d] == d)
+            .map(|d| (du[d].abs(), d))
+            .fold((0.0, 0), |b, c| if c.0 > b.0 { c } else { b });
+        let x = self.current_coordinates(u);
+        let node = at / 3;
+        eprintln!(
+            "      direction: max |du| {big:.3e} at dof {at} (node {node} at {:?}), piston {:.3e}",
+            &x[3 * node..3 * node + 3],
+            du[n]
+        );
     }
 
     /// Assembles the tangent of `eval` (growing the pattern for new contact
@@ -295,7 +315,13 @@ impl Simulation {
             let offsets = self.constraints.offsets(&u, piston);
             let r_norm = max_abs(&r);
             if debug_enabled() {
-                debug_link_changes(&mut debug_pressed, &eval.contact);
+                let x = self.current_coordinates(&u);
+                let c = self.contact.as_ref();
+                debug_link_changes(&mut debug_pressed, &eval.contact, |l| {
+                    c.map_or(([0.0; 2], 0.0), |c| {
+                        c.measure(&x, l.slave.0, l.slave.1, l.master.0, l.master.1)
+                    })
+                });
                 eprintln!(
                     "    it {iterations} |R| {r_norm:.3e} tol {tol:.3e} refactor {refactor} planes {:?} particle contacts {} penetration {:.2e}",
                     self.constraints.contact_counts(),
@@ -394,6 +420,9 @@ impl Simulation {
             let solved = self.linear.solve(&mut du);
             self.stats.linear_seconds += t0.elapsed().as_secs_f64();
             solved.map_err(|e| fail(e.into(), iterations))?;
+            if debug_enabled() {
+                self.debug_direction(&u, &du, &map);
+            }
             let r0_sq: f64 = r.iter().map(|x| x * x).sum();
             let best = line_search::backtrack(r0_sq, tol, |s| {
                 let mut ut = u.clone();
