@@ -106,16 +106,19 @@ const DESCENT_ITERATIONS: usize = 200;
 /// is known nearby (far outside a strongly twisted patch, Newton from the
 /// centre can wander to another stationary point of the distance).
 ///
-/// The result is a local minimum of the distance from `s` to the patch
-/// (extended beyond its edges). Where Newton on the projection conditions
-/// does not settle on one, the distance is minimised from `xi` by a descent
-/// that takes the Newton step where the distance's Hessian is positive and
-/// the Gauss-Newton one (the metric's) elsewhere, halved until the distance
-/// falls. Off a strongly warped patch the conditions have several roots and
-/// Newton can jump among them without end: on a deformed facet of the sc2
-/// cell of c/a = 5, 30 iterations ended on a point 0.016 mm from a node whose
-/// nearest point on the patch was 0.0092 mm off, and the node read 2.2e-3 mm
-/// deep in a particle it did not touch.
+/// The result is a root of the closest-point conditions. Off a strongly
+/// warped patch they have several, and Newton can jump among them without
+/// settling: on a deformed facet of the sc2 cell of c/a = 5, 30 iterations
+/// ended on a point 0.016 mm from a node whose nearest point on the patch
+/// was 0.0092 mm off, and the node read 2.2e-3 mm deep in a particle it did
+/// not touch. Where Newton does not settle, the distance is minimised from
+/// `xi` instead, by a descent that takes the Newton step where the
+/// distance's Hessian is positive definite and the Gauss-Newton one (the
+/// metric's) elsewhere, halved until the distance falls. (Where Newton
+/// settles on a saddle of the distance, far beyond a twisted facet's edge,
+/// its root is kept: replacing it by the descent's minimum stalled the sc2
+/// cell at n = 15, level 1: 4958 Newton iterations in 300 s to rho = 0.869,
+/// against 1373 to 0.9.)
 pub fn project_from(s: &[f64; 3], x: &[[f64; 3]; 4], xi0: [f64; 2]) -> [f64; 2] {
     let mut xi = xi0;
     for _ in 0..NEWTON_ITERATIONS {
@@ -123,7 +126,7 @@ pub fn project_from(s: &[f64; 3], x: &[[f64; 3]; 4], xi0: [f64; 2]) -> [f64; 2] 
         let moved = (next[0] - xi[0]).abs().max((next[1] - xi[1]).abs());
         xi = next;
         if !(moved > 1e-15) {
-            if is_local_minimum(s, x, xi) {
+            if xi[0].is_finite() && xi[1].is_finite() {
                 return xi;
             }
             break;
@@ -155,16 +158,6 @@ fn distance_derivatives(
         [dot(&d, a), dot(&d, b)],
         m12,
     )
-}
-
-/// Whether `xi` is a finite point where the distance's Hessian is positive
-/// definite (at a root of the projection conditions: a local minimum).
-fn is_local_minimum(s: &[f64; 3], x: &[[f64; 3]; 4], xi: [f64; 2]) -> bool {
-    if !(xi[0].is_finite() && xi[1].is_finite()) {
-        return false;
-    }
-    let ([h11, h12, h22], _, _) = distance_derivatives(s, x, xi);
-    h11 > 0.0 && h11 * h22 - h12 * h12 > 0.0
 }
 
 /// A local minimum of the distance from `s` to the patch, by descent from
@@ -334,10 +327,9 @@ mod tests {
     }
 
     #[test]
-    fn projection_is_a_local_minimum_of_the_distance_all_around_a_twisted_patch() {
+    fn projection_is_a_stationary_point_of_the_distance_all_around_a_twisted_patch() {
         // Points on a lattice around the facet, out to twice its size: each
-        // projects on a stationary point of the distance where its Hessian is
-        // positive definite.
+        // projects on a root of the closest-point conditions.
         let (x, _) = twisted_facet();
         let centre = patch(&x, [0.0, 0.0]).point;
         let size = 0.02;
@@ -351,7 +343,6 @@ mod tests {
                         centre[2] + 0.25 * size * k as f64,
                     ];
                     let xi = project(&s, &x);
-                    assert!(is_local_minimum(&s, &x, xi), "{s:?}: {xi:?}");
                     let ([h11, _, h22], g, _) = distance_derivatives(&s, &x, xi);
                     let scale = (h11 + h22).sqrt() * distance_squared(&s, &x, xi).sqrt();
                     assert!(g[0].abs().max(g[1].abs()) <= 1e-12 * scale, "{s:?}: {g:?}");
