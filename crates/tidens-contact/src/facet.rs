@@ -22,6 +22,15 @@ pub fn project_on(kind: FacetKind, s: &[f64; 3], x: &[[f64; 3]; 4]) -> [f64; 2] 
     }
 }
 
+/// Parameters of the projection of `s` on the facet, Newton from `xi` for
+/// quads (to follow a root of the closest-point conditions known nearby).
+pub fn project_from_on(kind: FacetKind, s: &[f64; 3], x: &[[f64; 3]; 4], xi: [f64; 2]) -> [f64; 2] {
+    match kind {
+        FacetKind::Quad => project_from(s, x, xi),
+        FacetKind::Triangle => project_triangle(s, &corners(x)),
+    }
+}
+
 /// Penetration and its gradient, `xi` the projection.
 pub fn gradient_on(kind: FacetKind, s: &[f64; 3], x: &[[f64; 3]; 4], xi: [f64; 2]) -> Penetration {
     match kind {

@@ -356,6 +356,42 @@ mod tests {
     }
 
     #[test]
+    fn newton_from_a_known_root_follows_it_where_newton_from_the_centre_jumps() {
+        // A saddle-shaped facet and a point above it moved by 1e-3: from the
+        // centre, Newton lands on one root of the closest-point conditions
+        // and then on another half the facet away; from the first root it
+        // follows that root (contact links start there, see
+        // `ParticleContact::pair`).
+        let x = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.6],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.6],
+        ];
+        let before = [
+            0.803_008_138_693_789_8,
+            0.801_313_217_241_944,
+            1.125_670_442_731_962_2,
+        ];
+        let after = [
+            0.802_085_801_020_956_5,
+            0.800_965_070_669_812_7,
+            1.125_838_035_039_618_4,
+        ];
+        let first = project(&before, &x);
+        let jumped = project(&after, &x);
+        let followed = project_from(&after, &x, first);
+        let gap = |a: [f64; 2], b: [f64; 2]| (a[0] - b[0]).abs().max((a[1] - b[1]).abs());
+        assert!(gap(first, jumped) > 0.5, "{first:?} {jumped:?}");
+        assert!(gap(first, followed) < 0.02, "{first:?} {followed:?}");
+        for xi in [jumped, followed] {
+            let p = patch(&x, xi);
+            let d = sub(&after, &p.point);
+            assert!(p.tangents.iter().all(|t| dot(&d, t).abs() < 1e-14));
+        }
+    }
+
+    #[test]
     fn shape_functions_and_their_derivatives_reproduce_the_patch() {
         let x = [
             [0.0, 0.0, 0.0],

@@ -153,9 +153,26 @@ impl StateSnapshot {
 /// surface it has a multiplier or a tie against, in master order.
 type NodeStates = Vec<(usize, NodeState)>;
 
+/// A slave node's link to a master facet for the step.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+struct Link {
+    /// Master surface.
+    master: usize,
+    /// Facet of the master surface.
+    facet: usize,
+    /// Facet parameters of the node's projection when the link was made or
+    /// last kept: Newton on the projection starts there, so that it follows
+    /// one root of the closest-point conditions while the node moves. Off
+    /// a strongly warped facet they have several; from the facet's centre,
+    /// Newton went to one or another as the node moved by 1e-8 mm, and the
+    /// node read 4.1e-3 mm deep at one and 1e-4 mm at the other (sc2 of
+    /// c/a = 5 at level 3, where Newton then failed at every step length).
+    start: [f64; 2],
+}
+
 /// The facets one slave node is paired with for the step, at most one per
 /// master surface, in master order.
-type NodePairing = Vec<(usize, usize)>;
+type NodePairing = Vec<Link>;
 
 /// Multiplier state of one slave node of one pass.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -308,7 +325,7 @@ impl ParticleContact {
     }
 
     /// The facet of surface `m` nearest to slave node `k` of surface `s`
-    /// within the search distance, and its distance. Parry finds the nearest
+    /// within the search distance, and the node's projection on it. Parry finds the nearest
     /// triangle; among the quads around its quad, the one whose bilinear
     /// projection lies deepest inside it is chosen: a geometric rule that
     /// mirror-symmetric meshes follow alike, so a node on an edge between
@@ -335,7 +352,7 @@ impl ParticleContact {
         k: usize,
         m: usize,
         mesh: &TriMesh,
-    ) -> Option<(usize, f64)> {
+    ) -> Option<(usize, [f64; 2])> {
         let p = point(x, self.surfaces[s].nodes[k]);
         let q = PVector::new(p[0], p[1], p[2]);
         let (proj, (tri, _)) = mesh.project_local_point_and_get_location_with_max_dist(
@@ -354,10 +371,10 @@ impl ParticleContact {
                 let xf = master.facets[f].map(|n| point(x, n));
                 let xi = facet::project_on(master.kind, &p, &xf);
                 let far = facet::penetration_on(master.kind, &p, &xf, xi).abs() > near;
-                (f == found || !far).then(|| (f, facet::outside(master.kind, xi)))
+                (f == found || !far).then(|| (f, xi, facet::outside(master.kind, xi)))
             })
-            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))?;
-        (best.1 <= KEEP_FACET_MARGIN).then_some((best.0, distance))
+            .min_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)))?;
+        (best.2 <= KEEP_FACET_MARGIN).then_some((best.0, best.1))
     }
 
     /// Pairs every slave node with the facet nearest to it of each master
@@ -404,21 +421,22 @@ impl ParticleContact {
         let mut touching = 0;
         for (s, nodes) in self.pairing.iter().enumerate() {
             for (k, links) in nodes.iter().enumerate() {
-                for &(m, f) in links {
-                    if !before[s][k].contains(&(m, f))
-                        && self.node_term(x, s, k, m, f, false).is_some()
-                    {
+                for l in links {
+                    let new = !before[s][k]
+                        .iter()
+                        .any(|b| (b.master, b.facet) == (l.master, l.facet));
+                    if new && self.node_term(x, s, k, l, false).is_some() {
                         if std::env::var_os("TIDENS_DEBUG").is_some() {
                             let olds: Vec<_> = before[s][k]
                                 .iter()
-                                .map(|&(om, of)| ((om, of), self.measure(x, s, k, om, of)))
+                                .map(|b| ((b.master, b.facet), self.measure(x, s, k, b)))
                                 .collect();
                             eprintln!(
                                 "      repair: node {:?} at {:?} new facet {:?} measured {:?}; before {:?}",
                                 (s, k),
                                 point(x, self.surfaces[s].nodes[k]),
-                                (m, f),
-                                self.measure(x, s, k, m, f),
+                                (l.master, l.facet),
+                                self.measure(x, s, k, l),
                                 olds
                             );
                         }
@@ -432,22 +450,37 @@ impl ParticleContact {
 
     /// Facet parameters and penetration \[mm\] of slave node `k` of surface
     /// `s` measured on facet `f` of surface `m` (its patch extended beyond
-    /// its edges if need be), in the configuration `x`.
-    pub fn measure(&self, x: &[f64], s: usize, k: usize, m: usize, f: usize) -> ([f64; 2], f64) {
-        let kind = self.surfaces[m].kind;
+    /// its edges if need be; Newton on the projection from the facet's
+    /// centre), in the configuration `x`.
+    pub fn measure_on(&self, x: &[f64], s: usize, k: usize, m: usize, f: usize) -> ([f64; 2], f64) {
+        let link = Link {
+            master: m,
+            facet: f,
+            start: [0.0; 2],
+        };
+        self.measure(x, s, k, &link)
+    }
+
+    /// Facet parameters and penetration \[mm\] of slave node `k` of surface
+    /// `s` on the facet of `link`, Newton on the projection from the
+    /// link's start.
+    fn measure(&self, x: &[f64], s: usize, k: usize, link: &Link) -> ([f64; 2], f64) {
+        let kind = self.surfaces[link.master].kind;
         let p = point(x, self.surfaces[s].nodes[k]);
-        let q = self.surfaces[m].facets[f].map(|n| point(x, n));
-        let xi = facet::project_on(kind, &p, &q);
+        let q = self.surfaces[link.master].facets[link.facet].map(|n| point(x, n));
+        let xi = facet::project_from_on(kind, &p, &q, link.start);
         (xi, facet::penetration_on(kind, &p, &q, xi))
     }
 
     /// Drops the links whose node has left its facet grown by
-    /// [`KEEP_FACET_MARGIN`] or gone beyond the search distance.
+    /// [`KEEP_FACET_MARGIN`] or gone beyond the search distance; the others
+    /// start their projection where the node projects now.
     fn drop_left(&mut self, x: &[f64]) {
-        let keep = |s: usize, k: usize, m: usize, f: usize| {
-            let (xi, penetration) = self.measure(x, s, k, m, f);
-            facet::outside(self.surfaces[m].kind, xi) <= KEEP_FACET_MARGIN
-                && penetration > -self.settings.search_distance
+        let keep = |s: usize, k: usize, l: &Link| {
+            let (xi, penetration) = self.measure(x, s, k, l);
+            let kept = facet::outside(self.surfaces[l.master].kind, xi) <= KEEP_FACET_MARGIN
+                && penetration > -self.settings.search_distance;
+            kept.then_some(Link { start: xi, ..*l })
         };
         let pairing: Vec<Vec<NodePairing>> = self
             .pairing
@@ -457,13 +490,7 @@ impl ParticleContact {
                 nodes
                     .iter()
                     .enumerate()
-                    .map(|(k, links)| {
-                        links
-                            .iter()
-                            .copied()
-                            .filter(|&(m, f)| keep(s, k, m, f))
-                            .collect()
-                    })
+                    .map(|(k, links)| links.iter().filter_map(|l| keep(s, k, l)).collect())
                     .collect()
             })
             .collect();
@@ -488,22 +515,26 @@ impl ParticleContact {
                 .map(|k| {
                     masters[s]
                         .iter()
-                        .filter(|&&m| !self.pairing[s][k].iter().any(|&(pm, _)| pm == m))
+                        .filter(|&&m| !self.pairing[s][k].iter().any(|l| l.master == m))
                         .filter_map(|&m| {
-                            let (facet, _) = self.nearest(x, s, k, m, meshes[m].as_ref()?)?;
-                            Some((m, facet))
+                            let (facet, start) = self.nearest(x, s, k, m, meshes[m].as_ref()?)?;
+                            Some(Link {
+                                master: m,
+                                facet,
+                                start,
+                            })
                         })
                         .collect()
                 })
                 .collect();
             for (k, new) in found.into_iter().enumerate() {
-                for (m, facet) in new {
-                    if self.node_term(x, s, k, m, facet, false).is_some() {
+                for link in new {
+                    if self.node_term(x, s, k, &link, false).is_some() {
                         touching += 1;
                     }
                     let links = &mut self.pairing[s][k];
-                    let at = links.partition_point(|&(pm, _)| pm < m);
-                    links.insert(at, (m, facet));
+                    let at = links.partition_point(|l| l.master < link.master);
+                    links.insert(at, link);
                 }
             }
         }
@@ -548,11 +579,11 @@ impl ParticleContact {
                     debug_assert_eq!(tm, m);
                     Some(self.tied_term(x, s, k, m, facet, xi, st.tie_lambda, with_tangent))
                 });
-                let pressed = self.pairing[s][k].iter().filter_map(move |&(m, facet)| {
-                    if self.node_state(s, k, m).tie.is_some() {
+                let pressed = self.pairing[s][k].iter().filter_map(move |l| {
+                    if self.node_state(s, k, l.master).tie.is_some() {
                         return None;
                     }
-                    self.node_term(x, s, k, m, facet, with_tangent)
+                    self.node_term(x, s, k, l, with_tangent)
                 });
                 tied.chain(pressed).collect::<Vec<_>>()
             })
@@ -609,13 +640,13 @@ impl ParticleContact {
         x: &[f64],
         s: usize,
         k: usize,
-        m: usize,
-        facet: usize,
+        link: &Link,
         with_tangent: bool,
     ) -> Option<ContactTerm> {
+        let (m, facet) = (link.master, link.facet);
         let (p, q, dofs) = self.gather(x, s, k, m, facet);
         let kind = self.surfaces[m].kind;
-        let xi = facet::project_on(kind, &p, &q);
+        let xi = facet::project_from_on(kind, &p, &q, link.start);
         // Nodes clearly apart from the facet need no derivatives.
         let band = -0.1 * self.settings.search_distance;
         let lambda = self.node_state(s, k, m).lambda;

@@ -319,7 +319,7 @@ impl Simulation {
                 let c = self.contact.as_ref();
                 debug_link_changes(&mut debug_pressed, &eval.contact, |l| {
                     c.map_or(([0.0; 2], 0.0), |c| {
-                        c.measure(&x, l.slave.0, l.slave.1, l.master.0, l.master.1)
+                        c.measure_on(&x, l.slave.0, l.slave.1, l.master.0, l.master.1)
                     })
                 });
                 eprintln!(
@@ -328,6 +328,17 @@ impl Simulation {
                     eval.contact.terms.len(),
                     eval.contact.max_penetration()
                 );
+                if let Some(t) = eval
+                    .contact
+                    .terms
+                    .iter()
+                    .max_by(|a, b| a.penetration.total_cmp(&b.penetration))
+                {
+                    eprintln!(
+                        "      deepest: {:?} on {:?} at xi {:?}",
+                        t.slave, t.master, t.location
+                    );
+                }
             }
             if !r_norm.is_finite() {
                 return Err(fail(StepFailure::NonFiniteResidual, iterations));
