@@ -27,8 +27,10 @@
 //!   [`ParticleContact::augment`] updates the multipliers (Uzawa) until the
 //!   penetration is below its tolerance.
 //! - within a step each node keeps the facets it was paired with at the
-//!   step's start ([`ParticleContact::pair`]), so the residual stays smooth
-//!   while Newton iterates; at convergence the nodes that slid off their
+//!   step's start ([`ParticleContact::pair`]), and its projection on each
+//!   starts where it projected then (one root of the closest-point
+//!   conditions followed), so the residual stays smooth while Newton
+//!   iterates; at convergence the nodes that slid off their
 //!   facet or came near another surface are paired afresh
 //!   ([`ParticleContact::repair`]), and Newton goes on if one touches.
 
@@ -325,11 +327,12 @@ impl ParticleContact {
     }
 
     /// The facet of surface `m` nearest to slave node `k` of surface `s`
-    /// within the search distance, and the node's projection on it. Parry finds the nearest
-    /// triangle; among the quads around its quad, the one whose bilinear
-    /// projection lies deepest inside it is chosen: a geometric rule that
-    /// mirror-symmetric meshes follow alike, so a node on an edge between
-    /// two facets is not left to the order of a tree traversal.
+    /// within the search distance, and the node's projection on it. Parry
+    /// finds the nearest triangle; among the quads around its quad, the one
+    /// whose bilinear projection lies deepest inside it is chosen: a
+    /// geometric rule that mirror-symmetric meshes follow alike, so a node
+    /// on an edge between two facets is not left to the order of a tree
+    /// traversal.
     ///
     /// Only the quads that measure the node about as far off as the
     /// nearest point of the surface is (within [`NEAR_FACET_SLACK`] of the
