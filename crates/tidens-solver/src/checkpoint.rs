@@ -19,8 +19,18 @@ use serde::{Deserialize, Serialize};
 use tidens_contact::ContactCheckpoint;
 use tidens_material::{Material, PointState};
 
-/// The format version written into each checkpoint.
-const VERSION: u32 = 1;
+/// The format version written into each checkpoint. Raised whenever what a
+/// checkpoint holds changes shape (2: each contact link keeps where its node
+/// last projected).
+const VERSION: u32 = 2;
+
+/// The first field of every checkpoint, read alone so that one written by
+/// another version of tidens is refused by its version, not by whichever
+/// field first fails to parse.
+#[derive(Deserialize)]
+struct Header {
+    version: u32,
+}
 
 /// Everything of a run at a step: converged state, material history,
 /// contact sets and multipliers, the step controller, the curve and the
@@ -69,15 +79,16 @@ impl Checkpoint {
 
     /// A checkpoint from [`Checkpoint::to_bytes`].
     pub fn from_bytes(bytes: &[u8]) -> Result<Self, SolverError> {
-        let c: Checkpoint = ciborium::from_reader(bytes)
-            .map_err(|e| SolverError::Checkpoint(format!("cannot be read ({e})")))?;
-        if c.version != VERSION {
+        let unreadable = |e| SolverError::Checkpoint(format!("cannot be read ({e})"));
+        let header: Header = ciborium::from_reader(bytes).map_err(unreadable)?;
+        if header.version != VERSION {
             return Err(SolverError::Checkpoint(format!(
-                "format version {} (this tidens reads {VERSION})",
-                c.version
+                "written by another version of tidens (checkpoint format {}, \
+                 this tidens reads format {VERSION}); run the case again from the start",
+                header.version
             )));
         }
-        Ok(c)
+        ciborium::from_reader(bytes).map_err(unreadable)
     }
 }
 
@@ -173,5 +184,44 @@ impl Simulation {
         self.factor = None;
         self.linear.forget();
         self.assembler = crate::assembler::Assembler::new(&self.body, &self.constraints);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Bytes of a map holding `version` and a field of no checkpoint.
+    fn written_with(version: u32) -> Vec<u8> {
+        #[derive(Serialize)]
+        struct Other {
+            version: u32,
+            links: Vec<(usize, usize)>,
+        }
+        let mut out = Vec::new();
+        let other = Other {
+            version,
+            links: vec![(3, 4)],
+        };
+        ciborium::into_writer(&other, &mut out).unwrap();
+        out
+    }
+
+    #[test]
+    fn a_checkpoint_of_another_format_is_refused_by_its_version() {
+        let Err(SolverError::Checkpoint(message)) = Checkpoint::from_bytes(&written_with(1)) else {
+            panic!("a format-1 checkpoint was read");
+        };
+        assert!(
+            message.contains("another version of tidens") && message.contains("format 1"),
+            "{message}"
+        );
+        // The right version with the wrong content is unreadable, not
+        // another version's.
+        let Err(SolverError::Checkpoint(message)) = Checkpoint::from_bytes(&written_with(VERSION))
+        else {
+            panic!("a checkpoint without its fields was read");
+        };
+        assert!(message.starts_with("cannot be read"), "{message}");
     }
 }
