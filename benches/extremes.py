@@ -139,6 +139,8 @@ def run_one(cell_name: str, v: Variant, level: int, timeout: float) -> dict[str,
         volume_bound=checks["volume_change_bound"],
         penetration_over_radius=checks["max_penetration_over_radius"],
         physical=checks["ok"],
+        stats=dict(r.stats),
+        dofs=case.simulation(v.until_density, v.until_time, []).degrees_of_freedom,
     )
     return row
 
@@ -173,6 +175,28 @@ def report(rows: list[dict[str, Any]]) -> None:
                 f"{r['failed_attempts']} | {fmt(r['final_density'], '.4f')} | {fmt(r['t09_s'])} | {fmt(r['monotone'])} | {fmt(r['finite'])} | "
                 f"{fmt(r['volume_change'], '.2e')} ({fmt(r['volume_bound'], '.1e')}) | {fmt(r['penetration_over_radius'], '.1e')} | {fmt(r['physical'])} |"
             )
+        costs(rs)
+
+
+def costs(rows: list[dict[str, Any]]) -> None:
+    """Where each run's time went: the unknowns (a cell of other particles,
+    c/a != 1, has another mesh), residual evaluations (the line search's
+    included), tangents, factorisations, and the seconds in elements,
+    particle contact, assembly and the linear solves."""
+    rows = [r for r in rows if r.get("stats")]
+    if not rows:
+        return
+    print("\n| case | unknowns | evaluations | tangents | factorisations (LBL^T) | elements [s] | contact [s] | assembly [s] | linear [s] | other [s] |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        st = r["stats"]
+        parts = [st["evaluation_seconds"], st["contact_seconds"], st["assembly_seconds"], st["linear_seconds"]]
+        print(
+            f"| {r['case']} | {r.get('dofs', '-')} | {st['evaluations']} | {st['tangent_evaluations']} | "
+            f"{st['llt_factorizations'] + st['lblt_factorizations']} ({st['lblt_factorizations']}) | "
+            + " | ".join(f"{x:.1f}" for x in parts)
+            + f" | {r['wall_s'] - sum(parts):.1f} |"
+        )
 
 
 def main() -> None:

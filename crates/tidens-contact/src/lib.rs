@@ -63,6 +63,13 @@ pub const TOUCH_STIFFNESS: f64 = 1e-3;
 /// stays within the facet grown by this factor (see [`ParticleContact::pair`]).
 const KEEP_FACET_MARGIN: f64 = 1.1;
 
+/// A node is paired afresh with a facet only while its projection lies
+/// within the facet grown by this factor, half of [`KEEP_FACET_MARGIN`]'s
+/// growth: a link made just inside the margin it is dropped at could be
+/// dropped and made again, at one converged state, for ever (see
+/// [`ParticleContact::nearest`]).
+const MAKE_FACET_MARGIN: f64 = 1.05;
+
 /// A node is paired only with a facet whose patch measures it at most this
 /// fraction of the search distance farther off than the nearest point of
 /// the surface (see [`ParticleContact::pair`]); the bilinear patches of a
@@ -343,11 +350,22 @@ impl ParticleContact {
     /// node in contact read 1.6e-2 mm deep on the far side's quad).
     ///
     /// None if even the chosen quad's projection lies beyond its edges (by
-    /// more than [`KEEP_FACET_MARGIN`]): the node then faces a ridge or
+    /// more than [`MAKE_FACET_MARGIN`]): the node then faces a ridge or
     /// corner of the master, where no quad's patch measures it (carried past
     /// its edge, a patch read a node of the same cell 3.1e-3 mm deep at
     /// xi = (1.52, -1.20), and the step was cut to 2e-5 s). The
     /// ridge's own nodes are held off the node's surface by the other pass.
+    /// A link is kept while the projection stays within the wider
+    /// [`KEEP_FACET_MARGIN`]; were links made up to that margin, a node
+    /// facing a corner could alternate between two facets without end: on
+    /// the sc2 cell of c/a = 5 at level 3 (rho = 0.75), a node near a
+    /// particle's slender tip was paired at convergence with a facet that
+    /// read it 4.1e-4 mm deep at xi = (-1.098, 1.085); pushed out, it
+    /// projected at xi = (-1.29, 1.01) (another root of the warped
+    /// patch), was dropped and paired with the neighbouring facet, 4.8e-4
+    /// mm off at xi = (1.01, -1.09); released, it came back 6e-5 mm, left
+    /// that facet (xi = 1.105) and was paired with the first again, and
+    /// Newton never ended (failures down to steps of 1e-5 s).
     fn nearest(
         &self,
         x: &[f64],
@@ -377,7 +395,25 @@ impl ParticleContact {
                 (f == found || !far).then(|| (f, xi, facet::outside(master.kind, xi)))
             })
             .min_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)))?;
-        (best.2 <= KEEP_FACET_MARGIN).then_some((best.0, best.1))
+        if std::env::var_os("TIDENS_DEBUG").is_some() {
+            let readings: Vec<_> = master
+                .ring(found)
+                .iter()
+                .map(|&f| {
+                    let xf = master.facets[f].map(|n| point(x, n));
+                    let xi = facet::project_on(master.kind, &p, &xf);
+                    (f, xi, facet::penetration_on(master.kind, &p, &xf, xi))
+                })
+                .collect();
+            if readings.iter().any(|r| r.2 > 3e-4) {
+                eprintln!(
+                    "      nearest: node {:?} at {p:?}, surface {m} {distance:.3e} off at triangle of facet {found}; chosen {:?}; ring {readings:?}",
+                    (s, k),
+                    (best.0, best.1, best.2)
+                );
+            }
+        }
+        (best.2 <= MAKE_FACET_MARGIN).then_some((best.0, best.1))
     }
 
     /// Pairs every slave node with the facet nearest to it of each master

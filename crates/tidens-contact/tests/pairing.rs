@@ -304,13 +304,52 @@ fn a_node_beyond_a_tip_is_not_measured_on_a_face_carried_past_it() {
     // half-width beyond A's edge (and 0.32 beyond the lower quad's).
     let terms = wedge_terms([1.08, 0.5, -0.01], 0.2);
     assert!(terms.is_empty(), "{terms:?}");
-    // Just past the edge (within a tenth of the half-width) the node keeps
-    // its facet: an edge's own nodes are measured on it.
-    let terms = wedge_terms([1.02, 0.5, -0.001], 0.2);
+    // Just past the edge (within a twentieth of the half-width) the nodes
+    // are paired with it: an edge's own nodes are measured on it.
+    let terms = wedge_terms([1.012, 0.5, -0.001], 0.2);
+    assert_eq!(terms.len(), 4, "{terms:?}");
     assert!(
         terms
             .iter()
             .all(|&(f, d)| f == 0 && (d - 1e-3).abs() < 1e-12),
         "{terms:?}"
+    );
+}
+
+#[test]
+fn a_link_is_made_within_a_narrower_margin_than_it_is_kept() {
+    // Slave nodes 1e-3 mm into the upper face's plane, 0.03 and 0.05 mm
+    // beyond the tip (0.06 and 0.1 of the half-width past A's edge): not
+    // paired afresh.
+    let terms = wedge_terms([1.04, 0.5, -0.001], 0.2);
+    assert!(terms.is_empty(), "{terms:?}");
+    // Paired 0.002 and 0.022 mm beyond the tip, then carried 0.02 mm
+    // further (0.044 and 0.084 of the half-width past A's edge): the links
+    // stay (dropped only beyond a tenth of the half-width), so a node
+    // cannot be dropped and paired again at one state.
+    let (nodes, surfaces) = wedge([1.012, 0.5, -0.001]);
+    let mut x: Vec<f64> = nodes.iter().flatten().copied().collect();
+    let mut c = contact_within(surfaces, 0.2);
+    c.pair(&x);
+    let slave_terms = |c: &ParticleContact, x: &[f64]| -> Vec<(usize, f64)> {
+        c.evaluate(x, false)
+            .terms
+            .iter()
+            .filter(|t| t.slave.0 == 1)
+            .map(|t| (t.master.1, t.penetration))
+            .collect()
+    };
+    assert_eq!(slave_terms(&c, &x).len(), 4);
+    let slave_nodes = c.surfaces()[1].nodes.clone();
+    for &n in &slave_nodes {
+        x[3 * n] += 0.02;
+    }
+    assert_eq!(c.repair(&x), 0);
+    let kept = slave_terms(&c, &x);
+    assert_eq!(kept.len(), 4, "{kept:?}");
+    assert!(
+        kept.iter()
+            .all(|&(f, d)| f == 0 && (d - 1e-3).abs() < 1e-12),
+        "{kept:?}"
     );
 }
