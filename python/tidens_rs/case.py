@@ -86,8 +86,9 @@ class SolverSettings:
     max_steps
         Step limit; reaching it raises :class:`ConvergenceError`.
     newton_max_iterations, newton_residual_tolerance
-        Newton iterations before a step is cut back, and the converged
-        residual as a fraction of the applied piston force.
+        Newton iterations of one solve before a step is cut back (each
+        update of the contact multipliers starts a new solve), and the
+        converged residual as a fraction of the applied piston force.
     contact_penalty_factor
         Penalty stiffness of particle-particle contact as a multiple of E/h,
         h the mean surface element size, in [0.01, 1e4], at most

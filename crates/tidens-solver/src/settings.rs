@@ -8,7 +8,8 @@ use tidens_contact::ContactMode;
 /// Newton iteration settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct NewtonSettings {
-    /// Iterations before a step is cut back (default 25).
+    /// Iterations of one Newton solve before a step is cut back (default
+    /// 25); each update of the contact multipliers starts a new solve.
     pub max_iterations: usize,
     /// Converged when every residual entry (nodal force, and the piston's
     /// force balance) is below this fraction of the applied piston force

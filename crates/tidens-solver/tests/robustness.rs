@@ -297,3 +297,37 @@ fn stiff_cases_on_bcc_close_their_contacts_and_densify_like_the_base_one() {
         );
     }
 }
+
+/// Each update of the contact multipliers poses a new equilibrium, and
+/// its Newton solve has the whole iteration limit: on the bcc cell at
+/// E/sigma = 1e2 during the ramp (a soft particle, contact pressures that
+/// the multipliers reach over several updates), steps take more iterations
+/// in all than one solve is allowed, and the run goes on. (Counted
+/// together, a step needing its updates at any step size was cut back to
+/// nothing: at level 3 from 2e-2 to 2e-14 s.)
+#[test]
+fn each_multiplier_update_has_its_own_newton_iterations() {
+    let scene = level1(Cell::bcc(0.05, 1.0).unwrap());
+    let material = Material {
+        young: 1e3,
+        ..Preset::Ti64Creep1293K.material()
+    };
+    let mut settings = pressed(10.0, 0.75);
+    let limit = 8;
+    settings.newton.max_iterations = limit;
+    let mut sim = Simulation::new(&scene, material, settings).unwrap();
+    // Steps that took more iterations than the limit at their first attempt.
+    let mut beyond = Vec::new();
+    while sim.status() == Status::Running {
+        let failed = sim.stats().failed_attempts;
+        let p = sim.advance().unwrap().clone();
+        if p.newton_iterations > limit && sim.stats().failed_attempts == failed {
+            beyond.push((p.step, p.newton_iterations));
+        }
+    }
+    assert!(
+        !beyond.is_empty(),
+        "no step went past {limit} iterations in one attempt"
+    );
+    assert!(sim.curve().last().unwrap().rel_density >= 0.75);
+}
