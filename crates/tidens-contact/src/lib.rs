@@ -395,24 +395,6 @@ impl ParticleContact {
                 (f == found || !far).then(|| (f, xi, facet::outside(master.kind, xi)))
             })
             .min_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)))?;
-        if std::env::var_os("TIDENS_DEBUG").is_some() {
-            let readings: Vec<_> = master
-                .ring(found)
-                .iter()
-                .map(|&f| {
-                    let xf = master.facets[f].map(|n| point(x, n));
-                    let xi = facet::project_on(master.kind, &p, &xf);
-                    (f, xi, facet::penetration_on(master.kind, &p, &xf, xi))
-                })
-                .collect();
-            if readings.iter().any(|r| r.2 > 3e-4) {
-                eprintln!(
-                    "      nearest: node {:?} at {p:?}, surface {m} {distance:.3e} off at triangle of facet {found}; chosen {:?}; ring {readings:?}",
-                    (s, k),
-                    (best.0, best.1, best.2)
-                );
-            }
-        }
         (best.2 <= MAKE_FACET_MARGIN).then_some((best.0, best.1))
     }
 

@@ -354,7 +354,8 @@ impl Progress {
 /// the target relative time error in [1e-6, 0.5]; max_strain_increment the
 /// largest plastic strain increment per step in (0, 2]; dt_initial_s, dt_max_s
 /// [s]; max_steps; time_targets_s [s], times a step must end on; Newton:
-/// newton_max_iterations per attempt, newton_residual_tolerance relative to
+/// newton_max_iterations per Newton solve (each update of the contact
+/// multipliers starts one), newton_residual_tolerance relative to
 /// the piston force; checkpoint_every, the steps at which the solver drops
 /// its cached factor so that a checkpoint taken there resumes bit for bit.
 /// resume_from (bytes of Simulation.checkpoint()) goes on from a checkpoint
