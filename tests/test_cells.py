@@ -253,6 +253,25 @@ def test_tied_planes_slow_the_sc_cell() -> None:
     assert t_tied > 1.07 * t_free
 
 
+def test_the_contact_facets_move_bcc_within_its_error_estimate() -> None:
+    # Flat triangles and bilinear patches are two discretisations of one
+    # surface: what the choice moves is part of the mesh error, which the
+    # coarse companion run estimates (level 2: t(0.85) 69.39 and 69.54 s,
+    # estimate 2.8 s).
+    runs = {}
+    for facets in td.CONTACT_FACETS:
+        case = td.Case(td.cells.bcc(), td.materials.TI64_CREEP_1293K, stress_mpa=10.0,
+                       solver=td.SolverSettings(mesh_level=2, contact_facets=facets))
+        runs[facets] = case.run(until_density=0.85)
+        assert runs[facets].summary()["contact"]["facets"] == facets
+    tri, bil = runs["triangles"], runs["bilinear"]
+    for rho in (0.8, 0.85):
+        t_tri, t_bil, err = tri.time_to_density(rho), bil.time_to_density(rho), tri.time_error_at_density(rho)
+        assert t_tri is not None and t_bil is not None and err is not None
+        assert t_tri != t_bil  # the choice reaches the core
+        assert abs(t_tri - t_bil) < abs(err), (rho, t_tri, t_bil, err)
+
+
 def test_bad_contact_options_name_themselves() -> None:
     with pytest.raises(ValueError, match="contact = 'sticky': must be one of frictionless, tied"):
         quick(td.cells.bcc(), contact="sticky")

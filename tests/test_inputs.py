@@ -63,6 +63,8 @@ def test_a_bad_case_is_refused_when_written(kw: dict[str, Any], kind: type[Excep
         ({"max_steps": 0}, ValueError, "max_steps = 0"),
         ({"dt_max_s": -1.0}, ValueError, "dt_max_s = -1"),
         ({"penetration_tolerance": 0.5}, ValueError, "penetration_tolerance = 0.5"),
+        ({"contact_facets": "quads"}, ValueError, "triangles, bilinear"),
+        ({"contact_facets": 3}, TypeError, "contact_facets = 3"),
     ],
 )
 def test_bad_solver_settings_are_refused_when_written(kw: dict[str, Any], kind: type[Exception], named: str) -> None:
@@ -266,8 +268,9 @@ def test_every_default_has_one_source() -> None:
     assert td.SolverSettings().as_dict() == _core.SOLVER_DEFAULTS
     args = build_parser().parse_args(["run", "--stress", "10", "--until-density", "0.8", "--out", "o"])
     d = _core.SOLVER_DEFAULTS
-    assert (args.grading, args.exact_volume, args.element, args.max_steps) == (
-        d["grading"], d["exact_volume"], d["element"], d["max_steps"])
+    assert (args.grading, args.exact_volume, args.element, args.contact_facets, args.max_steps) == (
+        d["grading"], d["exact_volume"], d["element"], d["contact_facets"], d["max_steps"])
+    assert d["contact_facets"] == td.CONTACT_FACETS[0]  # the choices list the default first
     assert (td.DEFAULT_MESH_LEVEL, td.DEFAULT_TOLERANCE) == (d["mesh_level"], d["tolerance"])
     case_defaults = {f.name: f.default for f in dataclasses.fields(td.Case)}
     assert (args.knockdown, args.ramp_time, args.contact) == (

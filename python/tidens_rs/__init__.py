@@ -11,6 +11,7 @@ Units everywhere: mm, N, MPa, s. A run in a few lines::
 
 from . import cells, continuum, materials, similarity, sweep
 from ._core import (
+    CONTACT_FACETS,
     CONTACT_MODES,
     Cell,
     ConvergenceError,
@@ -27,6 +28,7 @@ from .result import Result
 from .snapshot import Snapshot
 
 __all__ = [
+    "CONTACT_FACETS",
     "CONTACT_MODES",
     "DEFAULT_MESH_LEVEL",
     "DEFAULT_TOLERANCE",

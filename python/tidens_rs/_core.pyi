@@ -21,6 +21,7 @@ __all__ = [
     "__version__",
     "PRESET_NAMES",
     "CONTACT_MODES",
+    "CONTACT_FACETS",
     "DEFAULT_SIZE_RATIO",
     "SOLVER_DEFAULTS",
     "ELEMENTS",
@@ -30,6 +31,7 @@ __all__ = [
 __version__: str
 PRESET_NAMES: list[str]
 CONTACT_MODES: list[str]
+CONTACT_FACETS: list[str]
 DEFAULT_SIZE_RATIO: float
 SOLVER_DEFAULTS: dict[str, Any]
 ELEMENTS: list[str]
@@ -84,6 +86,7 @@ def check_parameters(
     tied_planes: bool = False,
     contact_penalty_factor: float | None = None,
     penetration_tolerance: float | None = None,
+    contact_facets: str | None = None,
     checkpoint_every: int | None = None,
     material: Material | None = None,
 ) -> None:
@@ -167,6 +170,7 @@ class Simulation:
         tied_planes: bool = False,
         contact_penalty_factor: float | None = None,
         penetration_tolerance: float | None = None,
+        contact_facets: str | None = None,
         checkpoint_every: int | None = None,
         resume_from: bytes | None = None,
     ) -> Simulation: ...

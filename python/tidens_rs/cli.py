@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import NoReturn
 
 from . import cells, continuum, materials, sweep
-from ._core import CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, TidensError, UnsupportedError, __version__
+from ._core import CONTACT_FACETS, CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, TidensError, UnsupportedError, __version__
 from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, FINISHED, Case, SolverSettings, resume
 from .io import check_output_dir
 from .result import MARK_DENSITIES, Result
@@ -56,6 +56,7 @@ _OPTION_OF = {
     "aspect_ratio": "--aspect-ratio",
     "size_ratio": "--size-ratio",
     "contact": "--contact",
+    "contact_facets": "--contact-facets",
     "out_dir": "--out",
     "checkpoint_every": "--checkpoint-every",
     "young_mpa/stress": "--E/(--knockdown x --stress)",
@@ -136,6 +137,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--grading", type=float, default=_DEFAULTS.grading, help=f"element-size ratio toward the contact points (default {_DEFAULTS.grading:g})")
     g.add_argument("--exact-volume", action=argparse.BooleanOptionalAction, default=_DEFAULTS.exact_volume, help=f"move each particle's surface nodes outward (contact points kept on the surface) so that its mesh has the exact spheroid volume (default {'on' if _DEFAULTS.exact_volume else 'off'})")
     g.add_argument("--element", choices=ELEMENTS, default=_DEFAULTS.element, help=f"hex8: mean-dilatation hexahedra; tet10: quadratic tetrahedra with one pressure, cut from the same blocks; default {_DEFAULTS.element}")
+    g.add_argument("--contact-facets", choices=CONTACT_FACETS, default=_DEFAULTS.contact_facets, help=f"the master surface of a hex8 particle, on which another particle's nodes are measured: each face's two flat triangles, or its bilinear patch (to see how much the contact discretisation moves a result); default {_DEFAULTS.contact_facets}")
     g.add_argument("--no-error-estimate", dest="error_estimate", action="store_false", help="skip the coarse companion run (one mesh level down at twice the tolerance, a fifth to a third of the cost) that gives the error estimate")
     g.add_argument("--max-steps", type=int, default=_DEFAULTS.max_steps, help=f"step limit (default {_DEFAULTS.max_steps})")
     g = p.add_argument_group("output")
@@ -290,6 +292,7 @@ def _run(args: argparse.Namespace) -> int:
             grading=args.grading,
             exact_volume=args.exact_volume,
             element=args.element,
+            contact_facets=args.contact_facets,
             max_steps=args.max_steps,
             checkpoint_every=args.checkpoint_every,
         ),

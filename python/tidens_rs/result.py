@@ -214,6 +214,7 @@ class Result:
                 "tied_planes": c.tied_planes,
                 "penalty_factor": c.solver.contact_penalty_factor,
                 "penetration_tolerance": c.solver.penetration_tolerance,
+                "facets": c.solver.contact_facets,
             },
             "solver": c.solver.as_dict(),
             "mesh_level": c.solver.mesh_level,

@@ -12,7 +12,9 @@
 //!   multiplier;
 //! - enforcement node to surface, both ways (two-pass, each pass carrying half
 //!   the tributary area so that identical particles are treated alike), on
-//!   bilinear quad facets, by an augmented Lagrangian: the energy of a slave
+//!   facets (flat triangles, each hexahedral face's two by
+//!   [`ContactSurface::from_quads_as_triangles`] or a tetrahedral face's
+//!   four, or bilinear quads), by an augmented Lagrangian: the energy of a slave
 //!   node of tributary area `A` is `A / (4 eps) <lambda + eps p>^2` (half of
 //!   `A / (2 eps) <.>^2` per pass) with `p` its penetration into the facet,
 //!   `lambda` its contact pressure multiplier and `<x> = max(x, 0)`. Its
@@ -142,15 +144,20 @@ pub struct ContactTerm {
     pub location: [f64; 2],
 }
 
-/// Saved multiplier state (every slave node's multipliers and ties against
-/// each master surface), to redo a step from.
+/// Saved contact state (every slave node's multipliers and ties against
+/// each master surface, and the facets it is paired with), to redo a step
+/// from: a failed attempt pairs nodes afresh at its intermediate states,
+/// and the links it made must not outlive it.
 #[derive(Clone, Debug, PartialEq)]
-pub struct StateSnapshot(Vec<Vec<NodeStates>>);
+pub struct StateSnapshot {
+    state: Vec<Vec<NodeStates>>,
+    pairing: Vec<Vec<NodePairing>>,
+}
 
 impl StateSnapshot {
     /// How many slave-master pairs carry a multiplier or a tie.
     pub fn len(&self) -> usize {
-        self.0.iter().flatten().map(Vec::len).sum()
+        self.state.iter().flatten().map(Vec::len).sum()
     }
 
     pub fn is_empty(&self) -> bool {
@@ -872,10 +879,14 @@ impl ParticleContact {
     }
 
     pub fn state_snapshot(&self) -> StateSnapshot {
-        StateSnapshot(self.state.clone())
+        StateSnapshot {
+            state: self.state.clone(),
+            pairing: self.pairing.clone(),
+        }
     }
 
     pub fn restore(&mut self, snapshot: &StateSnapshot) {
-        self.state.clone_from(&snapshot.0);
+        self.state.clone_from(&snapshot.state);
+        self.pairing.clone_from(&snapshot.pairing);
     }
 }

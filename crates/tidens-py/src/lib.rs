@@ -48,6 +48,12 @@ mod _core {
             .map(|(name, _)| *name)
             .collect();
         m.add("CONTACT_MODES", modes)?;
+        // The `contact_facets` choices, the default first.
+        let facets: Vec<&str> = super::simulation::CONTACT_FACETS
+            .iter()
+            .map(|(name, _)| *name)
+            .collect();
+        m.add("CONTACT_FACETS", facets)?;
         m.add("DEFAULT_SIZE_RATIO", tidens_solver::DEFAULT_SIZE_RATIO)?;
         // Every solver knob's default: the core's, read by the Python layer.
         m.add(

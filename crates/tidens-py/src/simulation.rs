@@ -19,8 +19,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 use tidens_solver::{
-    Checkpoint, ContactMode, ContactOptions, CurvePoint, ElementKind, LoadHistory, MeshOptions,
-    NewtonSettings, RunStats, Scene, Settings, Simulation, Status,
+    Checkpoint, ContactMode, ContactOptions, CurvePoint, ElementKind, HexFacets, LoadHistory,
+    MeshOptions, NewtonSettings, RunStats, Scene, Settings, Simulation, Status,
 };
 
 /// The Python names of the contact modes, in the order of `CONTACT_MODES`.
@@ -29,20 +29,28 @@ pub(crate) const CONTACT_MODES: [(&str, ContactMode); 2] = [
     ("tied", ContactMode::Tied),
 ];
 
-/// The contact mode called `name`, or a ValueError listing the choices.
-fn contact_mode(name: &str) -> PyResult<ContactMode> {
-    CONTACT_MODES
+/// The entry of `table` called `name`, or a ValueError naming the
+/// parameter and listing the choices.
+fn named<T: Copy>(parameter: &str, name: &str, table: &[(&str, T)]) -> PyResult<T> {
+    table
         .iter()
         .find(|(n, _)| *n == name)
-        .map(|&(_, mode)| mode)
+        .map(|&(_, value)| value)
         .ok_or_else(|| {
-            let choices: Vec<&str> = CONTACT_MODES.iter().map(|(n, _)| *n).collect();
+            let choices: Vec<&str> = table.iter().map(|(n, _)| *n).collect();
             PyValueError::new_err(format!(
-                "contact = '{name}': must be one of {}",
+                "{parameter} = '{name}': must be one of {}",
                 choices.join(", ")
             ))
         })
 }
+
+/// The Python names of the master facets of a hexahedral mesh's contact
+/// surface, the core's default first.
+pub(crate) const CONTACT_FACETS: [(&str, HexFacets); 2] = [
+    ("triangles", HexFacets::Triangles),
+    ("bilinear", HexFacets::Bilinear),
+];
 
 /// The particle index of every element of a scene (-1 for an element of no
 /// particle, as in the verification blocks).
@@ -64,17 +72,6 @@ fn element_particles(scene: &Scene) -> Vec<i64> {
 /// The Python names of the elements, the default first.
 pub(crate) const ELEMENTS: [(&str, ElementKind); 2] =
     [("hex8", ElementKind::Hex8), ("tet10", ElementKind::Tet10)];
-
-/// The element kind called `name`.
-fn element_kind(name: &str) -> PyResult<ElementKind> {
-    ELEMENTS
-        .iter()
-        .find(|(n, _)| *n == name)
-        .map(|&(_, kind)| kind)
-        .ok_or_else(|| {
-            PyValueError::new_err(format!("element = '{name}': must be one of hex8, tet10"))
-        })
-}
 
 /// The defaults of every solver knob, keyed by the Python argument names
 /// (None where the core picks the value from the case, as the first step).
@@ -99,6 +96,10 @@ pub(crate) fn solver_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("newton_residual_tolerance", s.newton.residual_tolerance)?;
     d.set_item("contact_penalty_factor", s.contact.penalty_factor)?;
     d.set_item("penetration_tolerance", s.contact.penetration_tolerance)?;
+    let facets = CONTACT_FACETS
+        .iter()
+        .find(|(_, f)| *f == s.contact.hex_facets);
+    d.set_item("contact_facets", facets.map(|(name, _)| *name))?;
     d.set_item("checkpoint_every", s.checkpoint_every)?;
     Ok(d)
 }
@@ -127,6 +128,7 @@ struct Knobs<'a> {
     tied_planes: bool,
     contact_penalty_factor: Option<f64>,
     penetration_tolerance: Option<f64>,
+    contact_facets: Option<&'a str>,
     checkpoint_every: Option<i64>,
 }
 
@@ -178,7 +180,7 @@ impl Knobs<'_> {
                 ..newton.clone()
             },
             contact: ContactOptions {
-                mode: contact_mode(self.contact)?,
+                mode: named("contact", self.contact, &CONTACT_MODES)?,
                 tied_planes: self.tied_planes,
                 penalty_factor: self
                     .contact_penalty_factor
@@ -186,6 +188,10 @@ impl Knobs<'_> {
                 penetration_tolerance: self
                     .penetration_tolerance
                     .unwrap_or(contact_defaults.penetration_tolerance),
+                hex_facets: match self.contact_facets {
+                    Some(name) => named("contact_facets", name, &CONTACT_FACETS)?,
+                    None => contact_defaults.hex_facets,
+                },
             },
             ..defaults.clone()
         };
@@ -200,7 +206,7 @@ impl Knobs<'_> {
         options
             .validate()
             .map_err(|e| solver_error(e, Phase::Setup))?;
-        let kind = element_kind(self.element.unwrap_or(ELEMENTS[0].0))?;
+        let kind = named("element", self.element.unwrap_or(ELEMENTS[0].0), &ELEMENTS)?;
         Ok((settings, options, kind))
     }
 }
@@ -234,6 +240,7 @@ impl Knobs<'_> {
     tied_planes = false,
     contact_penalty_factor = None,
     penetration_tolerance = None,
+    contact_facets = None,
     checkpoint_every = None,
     material = None,
 ))]
@@ -261,6 +268,7 @@ pub fn check_parameters(
     tied_planes: bool,
     contact_penalty_factor: Option<f64>,
     penetration_tolerance: Option<f64>,
+    contact_facets: Option<&str>,
     checkpoint_every: Option<i64>,
     material: Option<PyRef<'_, PyMaterial>>,
 ) -> PyResult<()> {
@@ -292,6 +300,7 @@ pub fn check_parameters(
         tied_planes,
         contact_penalty_factor,
         penetration_tolerance,
+        contact_facets,
         checkpoint_every,
     }
     .checked()?;
@@ -424,6 +433,7 @@ impl PySimulation {
         tied_planes = false,
         contact_penalty_factor = None,
         penetration_tolerance = None,
+        contact_facets = None,
         checkpoint_every = None,
         resume_from = None,
     ))]
@@ -454,6 +464,7 @@ impl PySimulation {
         tied_planes: bool,
         contact_penalty_factor: Option<f64>,
         penetration_tolerance: Option<f64>,
+        contact_facets: Option<&str>,
         checkpoint_every: Option<i64>,
         resume_from: Option<&[u8]>,
     ) -> PyResult<Self> {
@@ -485,6 +496,7 @@ impl PySimulation {
             tied_planes,
             contact_penalty_factor,
             penetration_tolerance,
+            contact_facets,
             checkpoint_every,
         }
         .checked()?;

@@ -20,9 +20,10 @@ use tidens_contact::ContactCheckpoint;
 use tidens_material::{Material, PointState};
 
 /// The format version written into each checkpoint. Raised whenever what a
-/// checkpoint holds changes shape (2: each contact link keeps where its node
-/// last projected).
-const VERSION: u32 = 2;
+/// checkpoint holds changes shape or meaning (2: each contact link keeps
+/// where its node last projected; 3: hexahedral surfaces' master facets are
+/// triangles by default, and a link names a triangle).
+const VERSION: u32 = 3;
 
 /// The first field of every checkpoint, read alone so that one written by
 /// another version of tidens is refused by its version, not by whichever

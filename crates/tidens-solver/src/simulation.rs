@@ -10,7 +10,7 @@ use crate::linear::LinearSolver;
 use crate::newton::{FactorKey, Solved};
 use crate::output::{CurvePoint, RunStats, Status};
 use crate::scene::Scene;
-use crate::settings::Settings;
+use crate::settings::{HexFacets, Settings};
 use crate::step_control::StepController;
 use tidens_contact::{ContactEvaluation, ContactSettings, ContactSurface, ParticleContact};
 use tidens_fem::ElementKind;
@@ -110,7 +110,12 @@ fn particle_contact(
         .particles
         .iter()
         .map(|p| match scene.element() {
-            ElementKind::Hex8 => ContactSurface::from_quads(&p.surface, scene.nodes()),
+            ElementKind::Hex8 => match settings.contact.hex_facets {
+                HexFacets::Triangles => {
+                    ContactSurface::from_quads_as_triangles(&p.surface, scene.nodes())
+                }
+                HexFacets::Bilinear => ContactSurface::from_quads(&p.surface, scene.nodes()),
+            },
             ElementKind::Tet10 => ContactSurface::from_triangles(&p.triangles, scene.nodes()),
         })
         .collect::<Result<Vec<_>, _>>()

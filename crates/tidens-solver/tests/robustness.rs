@@ -63,7 +63,12 @@ fn time_at(curve: &[CurvePoint], rho: f64) -> f64 {
 #[test]
 fn failed_newton_attempts_cut_back_restore_the_state_and_go_on() {
     let (free, free_stats, _) = bcc(25, 0.75);
-    let (hindered, stats, worst) = bcc(8, 0.75);
+    // At 8 or 9 iterations the run fails (step 33 to 37, at any step
+    // size): on triangular facets a node held by a facet's plane carried
+    // just past a convex ridge is released when it leaves the margin, the
+    // particle drops onto the next facet (3.8e-5 mm), and at the tolerance
+    // of 1e-7 closing that takes 10 iterations.
+    let (hindered, stats, worst) = bcc(10, 0.75);
     eprintln!(
         "failed attempts {} (free {}), steps {} (free {})",
         stats.failed_attempts, free_stats.failed_attempts, stats.steps, free_stats.steps
