@@ -96,7 +96,7 @@ def test_bcc_run_writes_contact_pressure_and_particles(tmp_path: Path) -> None:
     assert 0.0 < s["max_penetration_mm"] < 1e-4 * radius
     assert s["cell"]["name"] == "bcc" and len(s["cell"]["octants"]) == 2
     assert s["contact"] == {"mode": "frictionless", "tied_planes": False, "penalty_factor": 10.0,
-                            "penetration_tolerance": 1e-4}
+                            "penetration_tolerance": 1e-4, "facets": "triangles"}
     # The default snapshot densities below the bcc cell's rho0 are skipped.
     assert not (out / "fields_rho0.600.vtu").exists()
 

@@ -9,13 +9,14 @@ Units everywhere: mm, N, MPa, s. A run in a few lines::
     result.plot("density.png"); result.write_vtu("out/")
 """
 
-from . import cells, continuum, materials, similarity, sweep
+from . import cells, continuum, materials, packing, similarity, sweep
 from ._core import (
     CONTACT_FACETS,
     CONTACT_MODES,
     Cell,
     ConvergenceError,
     Material,
+    Packing,
     Simulation,
     TidensError,
     UnsupportedError,
@@ -38,6 +39,7 @@ __all__ = [
     "ConvergenceError",
     "Material",
     "OutputError",
+    "Packing",
     "Result",
     "Simulation",
     "Snapshot",
@@ -49,6 +51,7 @@ __all__ = [
     "continuum",
     "load",
     "materials",
+    "packing",
     "resume",
     "similarity",
     "sweep",

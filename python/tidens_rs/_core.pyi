@@ -13,6 +13,7 @@ __all__ = [
     "ConvergenceError",
     "Cell",
     "Material",
+    "Packing",
     "Simulation",
     "TidensError",
     "UnsupportedError",
@@ -115,6 +116,47 @@ class Material:
     def constrained_modulus_mpa(self) -> float: ...
     def with_elastic(self, young_mpa: float, poisson: float) -> Material: ...
     def creep_rate(self, q_mpa: float) -> float: ...
+
+@final
+class Packing:
+    """A packing of spheroids in a box [0, Lx) x [0, Ly) x [0, Lz) [mm]."""
+
+    @staticmethod
+    def generate(
+        particles: int,
+        *,
+        rho0: float = 0.6,
+        mean_radius_mm: float = 0.05,
+        aspect_ratio: float = 1.0,
+        size_ratio: float | None = None,
+        small_fraction: float = 0.5,
+        sigma: float | None = None,
+        boundary: str = "periodic",
+        box_aspect: tuple[float, float, float] = ...,
+        seed: int = 0,
+    ) -> Packing:
+        """A random dense packing at relative density rho0 (ValueError naming the parameter)."""
+    @staticmethod
+    def from_text(text: str, lengths_mm: tuple[float, float, float], boundary: str = "periodic") -> Packing:
+        """Reads `x y z a [c [ax ay az]]` lines (mm) in the box lengths_mm."""
+    def to_text(self) -> str: ...
+    @property
+    def lengths_mm(self) -> tuple[float, float, float]: ...
+    @property
+    def boundary(self) -> str: ...
+    @property
+    def rel_density(self) -> float: ...
+    @property
+    def centres_mm(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def semi_axes_mm(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def axes(self) -> npt.NDArray[np.float64]: ...
+    def contacts(self, tolerance_mm: float) -> list[tuple[int, int, tuple[int, int, int], float]]: ...
+    def coordination_number(self, tolerance_mm: float) -> float: ...
+    @property
+    def max_overlap_mm(self) -> float: ...
+    def __len__(self) -> int: ...
 
 @final
 class Cell:

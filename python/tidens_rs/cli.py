@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import NoReturn
 
 from . import cells, continuum, materials, sweep
-from ._core import CONTACT_FACETS, CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, TidensError, UnsupportedError, __version__
+from ._core import CONTACT_FACETS, CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, Packing, TidensError, UnsupportedError, __version__
 from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, FINISHED, Case, SolverSettings, resume
 from .io import check_output_dir
 from .result import MARK_DENSITIES, Result
@@ -55,6 +55,11 @@ _OPTION_OF = {
     "radius": "--radius",
     "aspect_ratio": "--aspect-ratio",
     "size_ratio": "--size-ratio",
+    "small_fraction": "--small-fraction",
+    "sigma": "--sigma",
+    "particles": "--particles",
+    "mean_radius_mm": "--radius",
+    "packing_seed": "--packing-seed",
     "contact": "--contact",
     "contact_facets": "--contact-facets",
     "out_dir": "--out",
@@ -456,6 +461,58 @@ def _figures(args: argparse.Namespace) -> int:
     return 3 if failed else 0
 
 
+def _add_pack_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--particles", type=int, required=True, help="number of particles, in [1, 10000]")
+    p.add_argument("--rho0", type=float, default=0.6, help="relative density, in [0.3, 0.74] (default 0.6; monodisperse spheres jam at about 0.62-0.64 in a periodic box, less in a die)")
+    p.add_argument("--radius", type=float, default=0.05, help="number mean of the volume-equivalent radius [mm] (default 0.05)")
+    p.add_argument("--aspect-ratio", type=float, default=1.0, help="spheroid c/a, in [0.2, 5], c along each particle's random axis (default 1)")
+    p.add_argument("--size-ratio", type=float, help="bimodal: large over small radius, in (1, 10]")
+    p.add_argument("--small-fraction", type=float, default=0.5, help="bimodal: number fraction of small particles, in [0, 1] (default 0.5)")
+    p.add_argument("--sigma", type=float, help="lognormal: standard deviation of ln(radius), in (0, 1]")
+    p.add_argument("--boundary", choices=("periodic", "die"), default="periodic", help="periodic in x, y and z (default), or a die: periodic in x and y, walls at z = 0 and Lz")
+    p.add_argument("--packing-seed", type=int, default=0, help="seed: the same options and seed give the same packing (default 0)")
+    p.add_argument("--out", type=Path, required=True, help="packing file to write (one particle per line, box and boundary in its header)")
+
+
+def _generate(args: argparse.Namespace) -> Packing:
+    return Packing.generate(
+        args.particles,
+        rho0=args.rho0,
+        mean_radius_mm=args.radius,
+        aspect_ratio=args.aspect_ratio,
+        size_ratio=args.size_ratio,
+        small_fraction=args.small_fraction,
+        sigma=args.sigma,
+        boundary=args.boundary,
+        seed=args.packing_seed,
+    )
+
+
+def _pack(args: argparse.Namespace) -> int:
+    import time
+
+    from . import packing
+
+    if args.packing_seed < 0:
+        raise ValueError(f"packing_seed = {args.packing_seed}: must be >= 0")
+    t0 = time.perf_counter()
+    try:
+        p = _generate(args)
+    except ValueError as e:
+        # rho0 is an option here (elsewhere it is the cell's density).
+        raise ValueError(re.sub(r"^rho0 = ", "--rho0 = ", str(e))) from e
+    wall = time.perf_counter() - t0
+    packing.write(p, args.out)
+    lx, ly, lz = p.lengths_mm
+    z = packing.coordination_number(p)
+    print(
+        f"{len(p)} particles, {p.boundary} box {lx:.6g} x {ly:.6g} x {lz:.6g} mm: rho0 = {p.rel_density:.6f}, "
+        f"coordination number {z:.3f} (gap <= {packing.COORDINATION_TOLERANCE:g} x mean radius), "
+        f"largest overlap {p.max_overlap_mm:.2e} mm, {wall:.2f} s; wrote {args.out}"
+    )
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="tidens", description="Powder-level FE of hot pressing of titanium powders (units: mm, N, MPa, s).")
     parser.add_argument("--version", action="version", version=f"tidens {__version__}")
@@ -471,6 +528,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_continuum_options(model)
     figures_parser = sub.add_parser("figures", help="the paper's studies: run them and draw the figures with their errors, captions and the findings checked")
     _add_figures_options(figures_parser)
+    pack = sub.add_parser("pack", help="a random dense packing of spheres or spheroids, written to a file with its rho0 and coordination number")
+    _add_pack_options(pack)
     return parser
 
 
@@ -494,6 +553,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _sweep(args)
         if args.command == "figures":
             return _figures(args)
+        if args.command == "pack":
+            return _pack(args)
         return _run(args)
     except (ValueError, TypeError, FileExistsError, UnsupportedError) as e:
         parser.error(str(e))

@@ -11,12 +11,12 @@
 //! shaken (random displacements and rotations) and compressed again, at most
 //! [`MAX_SHAKES`] times.
 
+use nalgebra::{UnitVector3, Vector3};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::neighbours::Cell;
-use crate::relax::{Outcome, Relaxer, Snapshot, unit};
-use crate::vec3::{V3, dot, rotate};
+use crate::relax::{Outcome, Relaxer, Snapshot, turned};
 
 /// Relative density of the random start.
 const START_DENSITY: f64 = 0.25;
@@ -49,16 +49,16 @@ pub(crate) struct Problem {
 
 /// A uniformly distributed unit vector (rejection from the unit ball, no
 /// trigonometry).
-fn random_unit(rng: &mut ChaCha8Rng) -> V3 {
+fn random_unit(rng: &mut ChaCha8Rng) -> UnitVector3<f64> {
     loop {
-        let v = [
+        let v = Vector3::new(
             2.0 * rng.random::<f64>() - 1.0,
             2.0 * rng.random::<f64>() - 1.0,
             2.0 * rng.random::<f64>() - 1.0,
-        ];
-        let r2 = dot(v, v);
+        );
+        let r2 = v.norm_squared();
         if r2 > 1e-6 && r2 <= 1.0 {
-            return unit(v);
+            return UnitVector3::new_normalize(v);
         }
     }
 }
@@ -89,9 +89,9 @@ pub(crate) fn compress(problem: &Problem, rng: &mut ChaCha8Rng) -> Result<(Snaps
         } else {
             rng.random::<f64>() * l[2]
         };
-        pos.push([x, y, z]);
+        pos.push(Vector3::new(x, y, z));
         axis.push(if a == c {
-            [0.0, 0.0, 1.0]
+            Vector3::z_axis()
         } else {
             random_unit(rng)
         });
@@ -166,10 +166,7 @@ pub(crate) fn compress(problem: &Problem, rng: &mut ChaCha8Rng) -> Result<(Snaps
                 if a != c {
                     let turn = random_unit(rng);
                     let angle = SHAKE_ROTATION * rng.random::<f64>();
-                    relaxer.axis[i] = unit(rotate(
-                        relaxer.axis[i],
-                        [angle * turn[0], angle * turn[1], angle * turn[2]],
-                    ));
+                    relaxer.axis[i] = turned(&relaxer.axis[i], &(turn.into_inner() * angle));
                 }
             }
             if relaxer.relax(tol, MAX_ITERATIONS) == Outcome::Relaxed {

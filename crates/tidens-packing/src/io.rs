@@ -7,11 +7,12 @@
 
 use std::fmt::Write as _;
 
+use nalgebra::{Unit, Vector3};
+
 use crate::error::{PackingError, check_positive};
 use crate::packing::{OVERLAP_TOLERANCE, Packing};
 use crate::particle::Particle;
 use crate::spec::Boundary;
-use crate::vec3::norm;
 
 const FIELDS: [&str; 8] = ["x", "y", "z", "a", "c", "ax", "ay", "az"];
 const LENGTH_NAMES: [&str; 3] = ["lengths[0]", "lengths[1]", "lengths[2]"];
@@ -61,16 +62,17 @@ fn parse_line(line: usize, data: &str) -> Result<Option<Particle>, PackingError>
         }
     }
     let axis = if tokens.len() == 8 {
-        let u = [v[5], v[6], v[7]];
-        let n = norm(u);
-        if !(n > 0.0) || !n.is_finite() {
-            return Err(parse_error(
-                line,
-                "ax",
-                format!("axis ({}, {}, {}) cannot be normalised", u[0], u[1], u[2]),
-            ));
+        let u = Vector3::new(v[5], v[6], v[7]);
+        match Unit::try_new_and_get(u, 0.0) {
+            Some((axis, n)) if n.is_finite() => axis.into_inner().into(),
+            _ => {
+                return Err(parse_error(
+                    line,
+                    "ax",
+                    format!("axis ({}, {}, {}) cannot be normalised", u[0], u[1], u[2]),
+                ));
+            }
         }
-        [u[0] / n, u[1] / n, u[2] / n]
     } else {
         [0.0, 0.0, 1.0]
     };
@@ -131,7 +133,7 @@ impl Packing {
         let cell = packing.cell();
         let lz = lengths[2];
         for (p, &line) in packing.particles.iter_mut().zip(&lines) {
-            p.centre = cell.wrap(p.centre);
+            p.centre = cell.wrap(p.centre.into()).into();
             if boundary == Boundary::Die {
                 let allowed = OVERLAP_TOLERANCE * p.equivalent_radius();
                 let e = p.support([0.0, 0.0, 1.0]);

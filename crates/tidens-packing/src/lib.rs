@@ -87,7 +87,6 @@ mod packing;
 mod particle;
 mod relax;
 mod spec;
-mod vec3;
 
 pub use error::PackingError;
 pub use packing::{Contact, OVERLAP_TOLERANCE, Packing, Wall, WallContact};

@@ -7,8 +7,9 @@
 //! cell list; small ones, or boxes with fewer than three cells along a
 //! periodic side, check every pair and image.
 
+use nalgebra::Vector3;
+
 use crate::spec::Boundary;
-use crate::vec3::{V3, add, dot, sub};
 
 /// Largest cell count along one side of the cell list.
 const MAX_CELLS_PER_SIDE: usize = 64;
@@ -18,7 +19,7 @@ const CELL_LIST_MIN_PARTICLES: usize = 64;
 /// The box: side lengths \[mm\] and which sides are periodic.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Cell {
-    pub(crate) lengths: V3,
+    pub(crate) lengths: Vector3<f64>,
     pub(crate) periodic: [bool; 3],
 }
 
@@ -33,7 +34,7 @@ pub(crate) struct PairImage {
 }
 
 impl Cell {
-    pub(crate) fn new(lengths: V3, boundary: Boundary) -> Cell {
+    pub(crate) fn new(lengths: Vector3<f64>, boundary: Boundary) -> Cell {
         Cell {
             lengths,
             periodic: [
@@ -45,16 +46,12 @@ impl Cell {
     }
 
     /// The shift vector of an image \[mm\].
-    pub(crate) fn offset(&self, image: [i32; 3]) -> V3 {
-        [
-            f64::from(image[0]) * self.lengths[0],
-            f64::from(image[1]) * self.lengths[1],
-            f64::from(image[2]) * self.lengths[2],
-        ]
+    pub(crate) fn offset(&self, image: [i32; 3]) -> Vector3<f64> {
+        Vector3::from(image.map(f64::from)).component_mul(&self.lengths)
     }
 
     /// `x` wrapped into `[0, L)` along the periodic sides.
-    pub(crate) fn wrap(&self, x: V3) -> V3 {
+    pub(crate) fn wrap(&self, x: Vector3<f64>) -> Vector3<f64> {
         let mut y = x;
         for k in 0..3 {
             if self.periodic[k] {
@@ -73,8 +70,13 @@ impl Cell {
     }
 
     /// Centre distance vector `x_j + image - x_i` \[mm\].
-    pub(crate) fn separation(&self, xi: V3, xj: V3, image: [i32; 3]) -> V3 {
-        add(sub(xj, xi), self.offset(image))
+    pub(crate) fn separation(
+        &self,
+        xi: &Vector3<f64>,
+        xj: &Vector3<f64>,
+        image: [i32; 3],
+    ) -> Vector3<f64> {
+        xj - xi + self.offset(image)
     }
 }
 
@@ -90,7 +92,12 @@ fn positive_image(n: [i32; 3]) -> bool {
 /// Every `(i, j, image)` with `|x_j + image - x_i| < R_i + R_j + extra`, `R`
 /// the bounding radii \[mm\]. The centres must be wrapped into the box along
 /// the periodic sides.
-pub(crate) fn pairs(cell: &Cell, centres: &[V3], radii: &[f64], extra: f64) -> Vec<PairImage> {
+pub(crate) fn pairs(
+    cell: &Cell,
+    centres: &[Vector3<f64>],
+    radii: &[f64],
+    extra: f64,
+) -> Vec<PairImage> {
     let r_max = radii.iter().fold(0.0_f64, |m, &r| m.max(r));
     let cut = 2.0 * r_max + extra;
     let mut counts = [1usize; 3];
@@ -109,16 +116,16 @@ pub(crate) fn pairs(cell: &Cell, centres: &[V3], radii: &[f64], extra: f64) -> V
     }
 }
 
-fn within(d: V3, cut: f64) -> bool {
-    dot(d, d) < cut * cut
+fn within(d: &Vector3<f64>, cut: f64) -> bool {
+    d.norm_squared() < cut * cut
 }
 
-fn all_pairs(cell: &Cell, centres: &[V3], radii: &[f64], extra: f64) -> Vec<PairImage> {
+fn all_pairs(cell: &Cell, centres: &[Vector3<f64>], radii: &[f64], extra: f64) -> Vec<PairImage> {
     let mut out = Vec::new();
     let n = centres.len();
     for i in 0..n {
         for j in i..n {
-            let d0 = sub(centres[j], centres[i]);
+            let d0 = centres[j] - centres[i];
             let cut = radii[i] + radii[j] + extra;
             let mut lo = [0i32; 3];
             let mut hi = [0i32; 3];
@@ -136,7 +143,7 @@ fn all_pairs(cell: &Cell, centres: &[V3], radii: &[f64], extra: f64) -> Vec<Pair
                         if i == j && !positive_image(image) {
                             continue;
                         }
-                        if within(add(d0, cell.offset(image)), cut) {
+                        if within(&(d0 + cell.offset(image)), cut) {
                             out.push(PairImage { i, j, image });
                         }
                     }
@@ -149,7 +156,7 @@ fn all_pairs(cell: &Cell, centres: &[V3], radii: &[f64], extra: f64) -> Vec<Pair
 
 fn cell_list_pairs(
     cell: &Cell,
-    centres: &[V3],
+    centres: &[Vector3<f64>],
     radii: &[f64],
     extra: f64,
     counts: [usize; 3],
@@ -220,7 +227,7 @@ fn cell_list_pairs(
                             continue;
                         }
                         let cut = radii[i] + radii[j] + extra;
-                        if within(cell.separation(centres[i], centres[j], image), cut) {
+                        if within(&cell.separation(&centres[i], &centres[j], image), cut) {
                             out.push(PairImage { i, j, image });
                         }
                     }
@@ -236,16 +243,20 @@ mod tests {
     use super::*;
     use rand::Rng;
 
-    fn random_system(n: usize, boundary: Boundary, seed: u64) -> (Cell, Vec<V3>, Vec<f64>) {
+    fn random_system(
+        n: usize,
+        boundary: Boundary,
+        seed: u64,
+    ) -> (Cell, Vec<Vector3<f64>>, Vec<f64>) {
         let mut rng = crate::distribution::stream(seed, 7);
-        let cell = Cell::new([11.0, 9.0, 13.0], boundary);
+        let cell = Cell::new(Vector3::new(11.0, 9.0, 13.0), boundary);
         let centres = (0..n)
             .map(|_| {
-                cell.wrap([
+                cell.wrap(Vector3::new(
                     rng.random::<f64>() * 11.0,
                     rng.random::<f64>() * 9.0,
                     rng.random::<f64>() * 13.0,
-                ])
+                ))
             })
             .collect();
         let radii = (0..n).map(|_| 0.2 + 0.4 * rng.random::<f64>()).collect();
@@ -276,10 +287,10 @@ mod tests {
     fn a_particle_in_a_small_box_sees_each_touching_image_once() {
         // One sphere of radius 0.5 in a unit cube: 3 self-pairs (+x, +y, +z),
         // 6 contacts counted from both sides.
-        let cell = Cell::new([1.0; 3], Boundary::Periodic);
-        let p = pairs(&cell, &[[0.5; 3]], &[0.5], 1e-9);
-        assert_eq!(p.len(), 3);
-        let cell = Cell::new([1.0; 3], Boundary::Die);
-        assert_eq!(pairs(&cell, &[[0.5; 3]], &[0.5], 1e-9).len(), 2);
+        let centre = [Vector3::repeat(0.5)];
+        let cell = Cell::new(Vector3::repeat(1.0), Boundary::Periodic);
+        assert_eq!(pairs(&cell, &centre, &[0.5], 1e-9).len(), 3);
+        let cell = Cell::new(Vector3::repeat(1.0), Boundary::Die);
+        assert_eq!(pairs(&cell, &centre, &[0.5], 1e-9).len(), 2);
     }
 }

@@ -30,15 +30,16 @@
 //! of `h` with respect to `d` and the two axes follow from the envelope
 //! theorem (`∂F/∂p` at the optimal λ).
 
-use crate::vec3::{Sym3, V3, dot, norm, scale};
+use nalgebra::{Matrix3, Vector3};
 
 /// A spheroid as seen by the contact functions: equatorial semi-axis `a`,
-/// semi-axis `c` along the unit vector `axis` \[mm\].
+/// semi-axis `c` along the unit vector `axis` \[mm\]. The derivatives in
+/// [`GapGradient`] treat `axis` as a free vector.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Shape {
     pub(crate) a: f64,
     pub(crate) c: f64,
-    pub(crate) axis: V3,
+    pub(crate) axis: Vector3<f64>,
 }
 
 impl Shape {
@@ -46,18 +47,15 @@ impl Shape {
         self.a == self.c
     }
 
-    /// `Ā = a² I + (c² - a²) u uᵀ`, the inverse of the shape matrix.
-    fn inverse_matrix(&self) -> Sym3 {
-        Sym3::iso_plus_dyad(
-            self.a * self.a,
-            self.c * self.c - self.a * self.a,
-            self.axis,
-        )
+    /// `Ā = a² I + (c² - a²) u uᵀ` \[mm²\], the inverse of the shape matrix.
+    fn inverse_matrix(&self) -> Matrix3<f64> {
+        let (a2, c2) = (self.a * self.a, self.c * self.c);
+        Matrix3::from_diagonal_element(a2) + self.axis * self.axis.transpose() * (c2 - a2)
     }
 
     /// Half-width along the unit vector `n` (support function) \[mm\].
-    pub(crate) fn support(&self, n: V3) -> f64 {
-        let un = dot(self.axis, n);
+    pub(crate) fn support(&self, n: &Vector3<f64>) -> f64 {
+        let un = self.axis.dot(n);
         (self.a * self.a + (self.c * self.c - self.a * self.a) * un * un).sqrt()
     }
 }
@@ -70,24 +68,27 @@ pub(crate) struct PwMax {
     /// The optimal `λ`.
     pub(crate) lambda: f64,
     /// `x = C(λ)⁻¹ d` \[1/mm\].
-    pub(crate) x: V3,
+    pub(crate) x: Vector3<f64>,
 }
 
 /// Perram-Wertheim contact function of `a` (centre at the origin) and `b`
 /// (centre at `d`), the Newton iteration started at `start` when it is in
 /// (0, 1) (the optimum of a nearby configuration). `None` for coincident
-/// centres.
-pub(crate) fn perram_wertheim(d: V3, a: &Shape, b: &Shape, start: f64) -> Option<PwMax> {
-    let dist = norm(d);
+/// centres. Each Newton step inverts the 3x3 matrix `C(λ)` once (symmetric
+/// positive definite for λ in [0, 1], a convex combination of two such
+/// matrices) for both of its right-hand sides.
+pub(crate) fn perram_wertheim(d: Vector3<f64>, a: &Shape, b: &Shape, start: f64) -> Option<PwMax> {
+    let dist = d.norm();
     if !(dist > 0.0) {
         return None;
     }
     let abar = a.inverse_matrix();
     let bbar = b.inverse_matrix();
-    let cprime = Sym3::combine(-1.0, &abar, 1.0, &bbar);
-    let dh = scale(1.0 / dist, d);
-    let ra = dot(dh, abar.mul(dh)).sqrt();
-    let rb = dot(dh, bbar.mul(dh)).sqrt();
+    let cprime = bbar - abar;
+    let c_at = |lambda: f64| abar * (1.0 - lambda) + bbar * lambda;
+    let dh = d / dist;
+    let ra = dh.dot(&(abar * dh)).sqrt();
+    let rb = dh.dot(&(bbar * dh)).sqrt();
     // Exact optimum for two spheres; a close start otherwise.
     let mut lambda = if start > 0.0 && start < 1.0 {
         start
@@ -96,13 +97,13 @@ pub(crate) fn perram_wertheim(d: V3, a: &Shape, b: &Shape, start: f64) -> Option
     };
     let (mut lo, mut hi) = (0.0_f64, 1.0_f64);
     for _ in 0..100 {
-        let c = Sym3::combine(1.0 - lambda, &abar, lambda, &bbar);
-        let x = c.solve(d)?;
-        let g = dot(d, x);
-        let y = cprime.mul(x);
-        let g1 = -dot(x, y);
-        let z = c.solve(y)?;
-        let g2 = 2.0 * dot(y, z);
+        let c = c_at(lambda).try_inverse()?;
+        let x = c * d;
+        let g = d.dot(&x);
+        let y = cprime * x;
+        let g1 = -x.dot(&y);
+        let z = c * y;
+        let g2 = 2.0 * y.dot(&z);
         let w = lambda * (1.0 - lambda);
         let f1 = (1.0 - 2.0 * lambda) * g + w * g1;
         let f2 = -2.0 * g + 2.0 * (1.0 - 2.0 * lambda) * g1 + w * g2;
@@ -124,10 +125,9 @@ pub(crate) fn perram_wertheim(d: V3, a: &Shape, b: &Shape, start: f64) -> Option
             break;
         }
     }
-    let c = Sym3::combine(1.0 - lambda, &abar, lambda, &bbar);
-    let x = c.solve(d)?;
+    let x = c_at(lambda).try_inverse()? * d;
     Some(PwMax {
-        f: lambda * (1.0 - lambda) * dot(d, x),
+        f: lambda * (1.0 - lambda) * d.dot(&x),
         lambda,
         x,
     })
@@ -140,8 +140,8 @@ fn coincident_gap(a: &Shape, b: &Shape) -> f64 {
 
 /// Centre-line gap `h` \[mm\] between `a` (centre at the origin) and `b`
 /// (centre at `d`); negative when they overlap.
-pub(crate) fn gap(d: V3, a: &Shape, b: &Shape) -> f64 {
-    let dist = norm(d);
+pub(crate) fn gap(d: Vector3<f64>, a: &Shape, b: &Shape) -> f64 {
+    let dist = d.norm();
     if a.is_sphere() && b.is_sphere() {
         return dist - a.a - b.a;
     }
@@ -157,72 +157,61 @@ pub(crate) struct GapGradient {
     /// Gap `h` \[mm\].
     pub(crate) h: f64,
     /// `∂h/∂d` (dimensionless).
-    pub(crate) d_d: V3,
+    pub(crate) d_d: Vector3<f64>,
     /// `∂h/∂u_A` \[mm\] (unconstrained; project with `u × ·` for a torque).
-    pub(crate) d_ua: V3,
+    pub(crate) d_ua: Vector3<f64>,
     /// `∂h/∂u_B` \[mm\].
-    pub(crate) d_ub: V3,
+    pub(crate) d_ub: Vector3<f64>,
     /// The optimal λ of the Perram-Wertheim function (NaN for two spheres
     /// or coincident centres).
     pub(crate) lambda: f64,
 }
 
+impl GapGradient {
+    /// Gap `h` \[mm\] with `∂h/∂d` and no axis derivatives (two spheres, or
+    /// coincident centres).
+    fn without_axes(h: f64, d_d: Vector3<f64>) -> GapGradient {
+        GapGradient {
+            h,
+            d_d,
+            d_ua: Vector3::zeros(),
+            d_ub: Vector3::zeros(),
+            lambda: f64::NAN,
+        }
+    }
+}
+
 /// Gap `h` between `a` (centre at the origin) and `b` (centre at `d`) and its
 /// derivatives, the Perram-Wertheim iteration started at `start` (see
 /// [`perram_wertheim`]). For coincident centres the derivatives are zero.
-pub(crate) fn gap_gradient(d: V3, a: &Shape, b: &Shape, start: f64) -> GapGradient {
-    let dist = norm(d);
-    let zero = [0.0; 3];
+pub(crate) fn gap_gradient(d: Vector3<f64>, a: &Shape, b: &Shape, start: f64) -> GapGradient {
+    let dist = d.norm();
     if a.is_sphere() && b.is_sphere() {
         let d_d = if dist > 0.0 {
-            scale(1.0 / dist, d)
+            d * (1.0 / dist)
         } else {
-            zero
+            Vector3::zeros()
         };
-        return GapGradient {
-            h: dist - a.a - b.a,
-            d_d,
-            d_ua: zero,
-            d_ub: zero,
-            lambda: f64::NAN,
-        };
+        return GapGradient::without_axes(dist - a.a - b.a, d_d);
     }
     let pw = match perram_wertheim(d, a, b, start) {
         Some(pw) if pw.f > 0.0 => pw,
-        _ => {
-            return GapGradient {
-                h: coincident_gap(a, b),
-                d_d: zero,
-                d_ua: zero,
-                d_ub: zero,
-                lambda: f64::NAN,
-            };
-        }
+        _ => return GapGradient::without_axes(coincident_gap(a, b), Vector3::zeros()),
     };
     let l = pw.lambda;
     let x = pw.x;
     let rs = 1.0 / pw.f.sqrt();
     let k = 0.5 * dist * rs * rs * rs;
     // ∂F/∂d, ∂F/∂u_A, ∂F/∂u_B at the optimal λ.
-    let f_d = scale(2.0 * l * (1.0 - l), x);
-    let f_ua = scale(
-        -2.0 * l * (1.0 - l) * (1.0 - l) * (a.c * a.c - a.a * a.a) * dot(x, a.axis),
-        x,
-    );
-    let f_ub = scale(
-        -2.0 * l * l * (1.0 - l) * (b.c * b.c - b.a * b.a) * dot(x, b.axis),
-        x,
-    );
+    let f_d = x * (2.0 * l * (1.0 - l));
+    let f_ua = x * (-2.0 * l * (1.0 - l) * (1.0 - l) * (a.c * a.c - a.a * a.a) * x.dot(&a.axis));
+    let f_ub = x * (-2.0 * l * l * (1.0 - l) * (b.c * b.c - b.a * b.a) * x.dot(&b.axis));
     let radial = (1.0 - rs) / dist;
     GapGradient {
         h: dist * (1.0 - rs),
-        d_d: [
-            radial * d[0] + k * f_d[0],
-            radial * d[1] + k * f_d[1],
-            radial * d[2] + k * f_d[2],
-        ],
-        d_ua: scale(k, f_ua),
-        d_ub: scale(k, f_ub),
+        d_d: d * radial + f_d * k,
+        d_ua: f_ua * k,
+        d_ub: f_ub * k,
         lambda: l,
     }
 }
@@ -230,34 +219,31 @@ pub(crate) fn gap_gradient(d: V3, a: &Shape, b: &Shape, start: f64) -> GapGradie
 /// Contact point of two touching (or nearly touching) spheroids, on the
 /// centre side of `a` (centre at the origin): `(1 - λ) Ā x`, used by tests.
 #[cfg(test)]
-pub(crate) fn contact_point(d: V3, a: &Shape, b: &Shape) -> Option<V3> {
+pub(crate) fn contact_point(d: Vector3<f64>, a: &Shape, b: &Shape) -> Option<Vector3<f64>> {
     let pw = perram_wertheim(d, a, b, f64::NAN)?;
-    let p = a.inverse_matrix().mul(pw.x);
-    let pa = scale(1.0 - pw.lambda, p);
+    let pa = a.inverse_matrix() * pw.x * (1.0 - pw.lambda);
     // The same point seen from b: d - λ B̄ x.
-    let pb = crate::vec3::sub(d, scale(pw.lambda, b.inverse_matrix().mul(pw.x)));
-    Some(scale(0.5, crate::vec3::add(pa, pb)))
+    let pb = d - b.inverse_matrix() * pw.x * pw.lambda;
+    Some((pa + pb) * 0.5)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vec3::{add, sub};
 
     fn sphere(r: f64) -> Shape {
         Shape {
             a: r,
             c: r,
-            axis: [0.0, 0.0, 1.0],
+            axis: Vector3::z(),
         }
     }
 
-    fn spheroid(a: f64, c: f64, axis: V3) -> Shape {
-        let n = norm(axis);
+    fn spheroid(a: f64, c: f64, axis: [f64; 3]) -> Shape {
         Shape {
             a,
             c,
-            axis: scale(1.0 / n, axis),
+            axis: Vector3::from(axis).normalize(),
         }
     }
 
@@ -268,14 +254,14 @@ mod tests {
         let a = sphere(0.7);
         let b = sphere(1.3);
         for d in [
-            [2.5, 0.0, 0.0],
-            [0.3, -1.1, 0.9],
-            [1.0, 1.0, 1.0],
-            [0.1, 0.2, -0.3],
+            Vector3::new(2.5, 0.0, 0.0),
+            Vector3::new(0.3, -1.1, 0.9),
+            Vector3::new(1.0, 1.0, 1.0),
+            Vector3::new(0.1, 0.2, -0.3),
         ] {
             let pw = perram_wertheim(d, &a, &b, f64::NAN).unwrap();
-            let h = norm(d) * (1.0 - 1.0 / pw.f.sqrt());
-            let expect = norm(d) - 2.0;
+            let h = d.norm() * (1.0 - 1.0 / pw.f.sqrt());
+            let expect = d.norm() - 2.0;
             assert!((h - expect).abs() < 1e-13, "d {d:?}: {h} vs {expect}");
             assert!((gap(d, &a, &b) - expect).abs() < 1e-15);
         }
@@ -286,23 +272,24 @@ mod tests {
         let a = 1.0;
         let c = 2.0 * a;
         let p = spheroid(a, c, [0.0, 0.0, 1.0]);
+        let along = |k: usize, t: f64| Vector3::ith(k, t);
         // Tip to tip: contact at 2c on z.
-        assert!(gap([0.0, 0.0, 2.0 * c], &p, &p).abs() < 1e-13);
-        assert!((gap([0.0, 0.0, 2.0 * c + 0.1], &p, &p) - 0.1).abs() < 1e-13);
-        assert!((gap([0.0, 0.0, 2.0 * c - 0.1], &p, &p) + 0.1).abs() < 1e-13);
+        assert!(gap(along(2, 2.0 * c), &p, &p).abs() < 1e-13);
+        assert!((gap(along(2, 2.0 * c + 0.1), &p, &p) - 0.1).abs() < 1e-13);
+        assert!((gap(along(2, 2.0 * c - 0.1), &p, &p) + 0.1).abs() < 1e-13);
         // Side by side: contact at 2a on x.
-        assert!(gap([2.0 * a, 0.0, 0.0], &p, &p).abs() < 1e-13);
-        assert!((gap([2.0 * a - 0.05, 0.0, 0.0], &p, &p) + 0.05).abs() < 1e-13);
+        assert!(gap(along(0, 2.0 * a), &p, &p).abs() < 1e-13);
+        assert!((gap(along(0, 2.0 * a - 0.05), &p, &p) + 0.05).abs() < 1e-13);
         // Crossed axes (z and x), apart on y: contact at 2a.
         let q = spheroid(a, c, [1.0, 0.0, 0.0]);
-        assert!(gap([0.0, 2.0 * a, 0.0], &p, &q).abs() < 1e-13);
+        assert!(gap(along(1, 2.0 * a), &p, &q).abs() < 1e-13);
         // Sphere against the tip: r + c.
         let s = sphere(0.6);
-        assert!(gap([0.0, 0.0, 0.6 + c], &p, &s).abs() < 1e-13);
+        assert!(gap(along(2, 0.6 + c), &p, &s).abs() < 1e-13);
         // Oblate.
         let o = spheroid(1.5, 0.5, [0.0, 1.0, 0.0]);
-        assert!(gap([0.0, 1.0, 0.0], &o, &o).abs() < 1e-13);
-        assert!(gap([3.0, 0.0, 0.0], &o, &o).abs() < 1e-13);
+        assert!(gap(along(1, 1.0), &o, &o).abs() < 1e-13);
+        assert!(gap(along(0, 3.0), &o, &o).abs() < 1e-13);
     }
 
     /// At the contact distance found along an arbitrary direction, the
@@ -313,32 +300,28 @@ mod tests {
         let a = spheroid(0.8, 2.1, [0.3, -0.5, 0.8]);
         let b = spheroid(1.2, 0.4, [0.9, 0.1, -0.2]);
         for dir in [[1.0, 0.2, 0.3], [-0.4, 1.0, 0.1], [0.2, -0.3, -1.0]] {
-            let n = scale(1.0 / norm(dir), dir);
-            let d0 = scale(3.0, n);
-            let h = gap(d0, &a, &b);
-            let d = scale(3.0 - h, n);
+            let n = Vector3::from(dir).normalize();
+            let h = gap(n * 3.0, &a, &b);
+            let d = n * (3.0 - h);
             assert!(gap(d, &a, &b).abs() < 1e-12);
             let p = contact_point(d, &a, &b).unwrap();
-            let on_surface = |s: &Shape, centre: V3| {
-                let r = sub(p, centre);
-                let ru = dot(r, s.axis);
-                let rperp2 = dot(r, r) - ru * ru;
+            let on_surface = |s: &Shape, centre: Vector3<f64>| {
+                let r = p - centre;
+                let ru = r.dot(&s.axis);
+                let rperp2 = r.norm_squared() - ru * ru;
                 rperp2 / (s.a * s.a) + ru * ru / (s.c * s.c)
             };
-            assert!((on_surface(&a, [0.0; 3]) - 1.0).abs() < 1e-10);
+            assert!((on_surface(&a, Vector3::zeros()) - 1.0).abs() < 1e-10);
             assert!((on_surface(&b, d) - 1.0).abs() < 1e-10);
-            let normal = |s: &Shape, centre: V3| {
-                let r = sub(p, centre);
-                let ru = dot(r, s.axis);
-                let g = add(
-                    scale(1.0 / (s.a * s.a), r),
-                    scale(ru * (1.0 / (s.c * s.c) - 1.0 / (s.a * s.a)), s.axis),
-                );
-                scale(1.0 / norm(g), g)
+            let normal = |s: &Shape, centre: Vector3<f64>| {
+                let r = p - centre;
+                let ru = r.dot(&s.axis);
+                let g = r / (s.a * s.a) + s.axis * (ru * (1.0 / (s.c * s.c) - 1.0 / (s.a * s.a)));
+                g.normalize()
             };
-            let na = normal(&a, [0.0; 3]);
+            let na = normal(&a, Vector3::zeros());
             let nb = normal(&b, d);
-            assert!((dot(na, nb) + 1.0).abs() < 1e-10, "{}", dot(na, nb));
+            assert!((na.dot(&nb) + 1.0).abs() < 1e-10, "{}", na.dot(&nb));
         }
     }
 
@@ -346,48 +329,38 @@ mod tests {
     fn gap_is_symmetric() {
         let a = spheroid(0.8, 2.1, [0.3, -0.5, 0.8]);
         let b = spheroid(1.2, 0.4, [0.9, 0.1, -0.2]);
-        let d = [0.8, 0.5, -0.3];
+        let d = Vector3::new(0.8, 0.5, -0.3);
         let hab = gap(d, &a, &b);
-        let hba = gap(scale(-1.0, d), &b, &a);
+        let hba = gap(-d, &b, &a);
         assert!((hab - hba).abs() < 1e-13);
         assert!(hab < 0.0);
     }
 
+    /// `∂h/∂d`, `∂h/∂u_A` and `∂h/∂u_B` (the axes as free vectors) against
+    /// central differences of the gap.
     #[test]
     fn gradient_matches_finite_differences() {
         let a = spheroid(0.8, 2.1, [0.3, -0.5, 0.8]);
         let b = spheroid(1.2, 0.4, [0.9, 0.1, -0.2]);
-        let d = [1.1, 0.7, -0.4];
+        let d = Vector3::new(1.1, 0.7, -0.4);
         let g = gap_gradient(d, &a, &b, f64::NAN);
         assert!((g.h - gap(d, &a, &b)).abs() < 1e-14);
         let eps = 1e-6;
+        let central = |h: &dyn Fn(f64) -> f64| (h(eps) - h(-eps)) / (2.0 * eps);
+        let tilted = |s: &Shape, e: Vector3<f64>| Shape {
+            axis: s.axis + e,
+            ..*s
+        };
         for k in 0..3 {
-            let mut dp = d;
-            let mut dm = d;
-            dp[k] += eps;
-            dm[k] -= eps;
-            let fd = (gap(dp, &a, &b) - gap(dm, &a, &b)) / (2.0 * eps);
-            assert!((fd - g.d_d[k]).abs() < 1e-7, "d[{k}]: {fd} vs {}", g.d_d[k]);
-            let mut ap = a;
-            let mut am = a;
-            ap.axis[k] += eps;
-            am.axis[k] -= eps;
-            let fd = (gap(d, &ap, &b) - gap(d, &am, &b)) / (2.0 * eps);
-            assert!(
-                (fd - g.d_ua[k]).abs() < 1e-7,
-                "ua[{k}]: {fd} vs {}",
-                g.d_ua[k]
-            );
-            let mut bp = b;
-            let mut bm = b;
-            bp.axis[k] += eps;
-            bm.axis[k] -= eps;
-            let fd = (gap(d, &a, &bp) - gap(d, &a, &bm)) / (2.0 * eps);
-            assert!(
-                (fd - g.d_ub[k]).abs() < 1e-7,
-                "ub[{k}]: {fd} vs {}",
-                g.d_ub[k]
-            );
+            let e = |t: f64| Vector3::ith(k, t);
+            let checks = [
+                ("d", central(&|t| gap(d + e(t), &a, &b)), g.d_d[k]),
+                ("ua", central(&|t| gap(d, &tilted(&a, e(t)), &b)), g.d_ua[k]),
+                ("ub", central(&|t| gap(d, &a, &tilted(&b, e(t)))), g.d_ub[k]),
+            ];
+            for (name, fd, exact) in checks {
+                assert!((fd - exact).abs() < 1e-7, "{name}[{k}]: {fd} vs {exact}");
+            }
         }
     }
 }

@@ -1,5 +1,6 @@
 //! [`Packing`]: generation, density, contacts and overlaps.
 
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use crate::compress::{Problem, compress};
@@ -8,7 +9,6 @@ use crate::error::PackingError;
 use crate::neighbours::{self, Cell};
 use crate::overlap;
 use crate::particle::Particle;
-use crate::relax::unit;
 use crate::spec::{Boundary, PackingSpec};
 
 /// Largest overlap left in a generated packing, relative to the mean
@@ -111,7 +111,7 @@ impl Packing {
                 });
             }
         }
-        let cell = Cell::new(lengths, spec.boundary);
+        let cell = Cell::new(lengths.into(), spec.boundary);
         let problem = Problem {
             cell,
             die: spec.boundary == Boundary::Die,
@@ -134,10 +134,10 @@ impl Packing {
                 let axis = if shape.a == shape.c {
                     [0.0, 0.0, 1.0]
                 } else {
-                    unit(*u)
+                    u.into_inner().into()
                 };
                 let mut p = Particle {
-                    centre: cell.wrap(*x),
+                    centre: cell.wrap(*x).into(),
                     axis,
                     ..*shape
                 };
@@ -182,14 +182,18 @@ impl Packing {
     }
 
     pub(crate) fn cell(&self) -> Cell {
-        Cell::new(self.lengths, self.boundary)
+        Cell::new(self.lengths.into(), self.boundary)
     }
 
     /// Every particle pair (periodic images included) whose gap is at most
     /// `extra` \[mm\], with its gap; centres wrapped first.
     fn pairs_within(&self, extra: f64) -> Vec<Contact> {
         let cell = self.cell();
-        let centres: Vec<[f64; 3]> = self.particles.iter().map(|p| cell.wrap(p.centre)).collect();
+        let centres: Vec<Vector3<f64>> = self
+            .particles
+            .iter()
+            .map(|p| cell.wrap(p.centre.into()))
+            .collect();
         let radii: Vec<f64> = self
             .particles
             .iter()
@@ -198,7 +202,7 @@ impl Packing {
         neighbours::pairs(&cell, &centres, &radii, extra.max(0.0))
             .into_iter()
             .filter_map(|p| {
-                let d = cell.separation(centres[p.i], centres[p.j], p.image);
+                let d = cell.separation(&centres[p.i], &centres[p.j], p.image);
                 let gap = overlap::gap(
                     d,
                     &self.particles[p.i].shape(),

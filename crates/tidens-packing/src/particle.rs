@@ -1,9 +1,9 @@
 //! One spheroidal particle.
 
+use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use crate::overlap::{self, Shape};
-use crate::vec3::sub;
 
 /// A spheroid: centre, equatorial semi-axis `a`, semi-axis `c` along the unit
 /// symmetry axis `axis`. All lengths in mm. A sphere has `c == a` (its axis is
@@ -42,7 +42,7 @@ impl Particle {
     /// function `sqrt(a^2 + (c^2 - a^2) (axis . n)^2)`) \[mm\]: the particle
     /// lies between the planes `n . (x - centre) = ±support(n)`.
     pub fn support(&self, n: [f64; 3]) -> f64 {
-        self.shape().support(n)
+        self.shape().support(&Vector3::from(n))
     }
 
     /// Gap between the surfaces of `self` and `other` (no periodic images)
@@ -54,7 +54,7 @@ impl Particle {
     /// smallest possible contact distance `min(a1, c1) + min(a2, c2)`.
     pub fn gap(&self, other: &Particle) -> f64 {
         overlap::gap(
-            sub(other.centre, self.centre),
+            Vector3::from(other.centre) - Vector3::from(self.centre),
             &self.shape(),
             &other.shape(),
         )
@@ -64,7 +64,7 @@ impl Particle {
         Shape {
             a: self.a,
             c: self.c,
-            axis: self.axis,
+            axis: Vector3::from(self.axis),
         }
     }
 }

@@ -11,9 +11,10 @@
 //! surface displacement `R theta` (`R` the bounding radius), its generalised
 //! force is the torque over `R`.
 
+use nalgebra::{Rotation3, UnitVector3, Vector3};
+
 use crate::neighbours::{self, Cell, PairImage};
 use crate::overlap::{self, Shape};
-use crate::vec3::{V3, add, cross, dot, norm, rotate, scale, sub};
 
 /// FIRE parameters (FIRE 2.0 defaults, time step for unit stiffness).
 const DT_START: f64 = 0.1;
@@ -42,11 +43,11 @@ pub(crate) enum Outcome {
     Stuck,
 }
 
-/// Saved positions and axes.
+/// Saved centres \[mm\] and unit axes.
 #[derive(Clone, Debug)]
 pub(crate) struct Snapshot {
-    pub(crate) pos: Vec<V3>,
-    pub(crate) axis: Vec<V3>,
+    pub(crate) pos: Vec<Vector3<f64>>,
+    pub(crate) axis: Vec<UnitVector3<f64>>,
 }
 
 /// The system being relaxed: particles of full-size semi-axes `(a, c)`
@@ -59,16 +60,20 @@ pub(crate) struct Relaxer {
     base: Vec<(f64, f64)>,
     rotations: bool,
     s: f64,
-    pub(crate) pos: Vec<V3>,
-    pub(crate) axis: Vec<V3>,
+    /// Centres \[mm\].
+    pub(crate) pos: Vec<Vector3<f64>>,
+    /// Unit symmetry axes.
+    pub(crate) axis: Vec<UnitVector3<f64>>,
     pairs: Vec<PairImage>,
     /// Last optimal Perram-Wertheim λ of each pair (NaN: none yet).
     lambda: Vec<f64>,
-    pos_at_build: Vec<V3>,
+    pos_at_build: Vec<Vector3<f64>>,
     s_at_build: f64,
     skin: f64,
-    force: Vec<V3>,
-    torque: Vec<V3>,
+    /// Forces, minus `∂U/∂x` \[mm\].
+    force: Vec<Vector3<f64>>,
+    /// Torques, minus the rotational derivative of `U` \[mm^2\].
+    torque: Vec<Vector3<f64>>,
 }
 
 /// Energy and largest overlap of a configuration.
@@ -86,8 +91,8 @@ impl Relaxer {
         cell: Cell,
         die: bool,
         base: Vec<(f64, f64)>,
-        pos: Vec<V3>,
-        axis: Vec<V3>,
+        pos: Vec<Vector3<f64>>,
+        axis: Vec<UnitVector3<f64>>,
     ) -> Relaxer {
         let n = base.len();
         let rotations = base.iter().any(|&(a, c)| a != c);
@@ -105,8 +110,8 @@ impl Relaxer {
             pos_at_build: Vec::new(),
             s_at_build: f64::NAN,
             skin: SKIN * mean_bound,
-            force: vec![[0.0; 3]; n],
-            torque: vec![[0.0; 3]; n],
+            force: vec![Vector3::zeros(); n],
+            torque: vec![Vector3::zeros(); n],
         }
     }
 
@@ -132,7 +137,7 @@ impl Relaxer {
         Shape {
             a: self.s * a,
             c: self.s * c,
-            axis: self.axis[i],
+            axis: self.axis[i].into_inner(),
         }
     }
 
@@ -151,7 +156,7 @@ impl Relaxer {
                 .pos
                 .iter()
                 .zip(&self.pos_at_build)
-                .any(|(x, y)| dot(sub(*x, *y), sub(*x, *y)) > half * half);
+                .any(|(x, y)| (x - y).norm_squared() > half * half);
         if !stale {
             return;
         }
@@ -168,38 +173,34 @@ impl Relaxer {
     /// Forces and torques (minus the gradient of `U`) into `self.force`,
     /// `self.torque`.
     fn evaluate(&mut self) -> Eval {
-        for f in &mut self.force {
-            *f = [0.0; 3];
-        }
-        for t in &mut self.torque {
-            *t = [0.0; 3];
-        }
+        self.force.fill(Vector3::zeros());
+        self.torque.fill(Vector3::zeros());
         let mut max_overlap = 0.0_f64;
         let mut energy = 0.0;
         for (p, lambda) in self.pairs.iter().zip(self.lambda.iter_mut()) {
             let (i, j) = (p.i, p.j);
-            let d = self.cell.separation(self.pos[i], self.pos[j], p.image);
+            let d = self.cell.separation(&self.pos[i], &self.pos[j], p.image);
             let (a_i, c_i) = self.base[i];
             let (a_j, c_j) = self.base[j];
             let reach = self.s * (a_i.max(c_i) + a_j.max(c_j));
-            if dot(d, d) >= reach * reach {
+            if d.norm_squared() >= reach * reach {
                 continue;
             }
             let si = Shape {
                 a: self.s * a_i,
                 c: self.s * c_i,
-                axis: self.axis[i],
+                axis: self.axis[i].into_inner(),
             };
             let sj = Shape {
                 a: self.s * a_j,
                 c: self.s * c_j,
-                axis: self.axis[j],
+                axis: self.axis[j].into_inner(),
             };
             if !(si.is_sphere() && sj.is_sphere()) {
                 // Separating axis along d: the projections do not overlap.
-                let dist = dot(d, d).sqrt();
-                let n = scale(1.0 / dist, d);
-                if dist >= si.support(n) + sj.support(n) {
+                let dist = d.norm();
+                let n = d * (1.0 / dist);
+                if dist >= si.support(&n) + sj.support(&n) {
                     continue;
                 }
             }
@@ -210,29 +211,29 @@ impl Relaxer {
             }
             max_overlap = max_overlap.max(-g.h);
             energy += 0.5 * g.h * g.h;
-            let fd = scale(g.h, g.d_d);
-            self.force[i] = add(self.force[i], fd);
-            self.force[j] = sub(self.force[j], fd);
+            let fd = g.d_d * g.h;
+            self.force[i] += fd;
+            self.force[j] -= fd;
             if self.rotations {
-                self.torque[i] = sub(self.torque[i], cross(si.axis, scale(g.h, g.d_ua)));
-                self.torque[j] = sub(self.torque[j], cross(sj.axis, scale(g.h, g.d_ub)));
+                self.torque[i] -= si.axis.cross(&(g.d_ua * g.h));
+                self.torque[j] -= sj.axis.cross(&(g.d_ub * g.h));
             }
         }
         if self.die {
             let lz = self.cell.lengths[2];
             for i in 0..self.pos.len() {
                 let sh = self.shape(i);
-                let e = sh.support([0.0, 0.0, 1.0]);
+                let e = sh.support(&Vector3::z());
                 let z = self.pos[i][2];
                 // d e / d u = (c^2 - a^2) u_z / e along z.
-                let de_du = [0.0, 0.0, (sh.c * sh.c - sh.a * sh.a) * sh.axis[2] / e];
+                let de_du = Vector3::z() * ((sh.c * sh.c - sh.a * sh.a) * sh.axis[2] / e);
                 for (h, dir) in [(z - e, 1.0), (lz - z - e, -1.0)] {
                     if h < 0.0 {
                         max_overlap = max_overlap.max(-h);
                         energy += 0.5 * h * h;
                         self.force[i][2] -= h * dir;
                         if self.rotations {
-                            self.torque[i] = add(self.torque[i], cross(sh.axis, scale(h, de_du)));
+                            self.torque[i] += sh.axis.cross(&(de_du * h));
                         }
                     }
                 }
@@ -254,21 +255,21 @@ impl Relaxer {
         let mut s_free = self.s;
         for p in &self.pairs {
             let (i, j) = (p.i, p.j);
-            let d = self.cell.separation(self.pos[i], self.pos[j], p.image);
+            let d = self.cell.separation(&self.pos[i], &self.pos[j], p.image);
             let reach = self.bound(i) + self.bound(j);
-            if dot(d, d) >= reach * reach {
+            if d.norm_squared() >= reach * reach {
                 continue;
             }
             let h = overlap::gap(d, &self.shape(i), &self.shape(j));
             if h < 0.0 {
-                let dist = norm(d);
+                let dist = d.norm();
                 s_free = s_free.min(self.s * dist / (dist - h));
             }
         }
         if self.die {
             let lz = self.cell.lengths[2];
             for i in 0..self.pos.len() {
-                let e = self.shape(i).support([0.0, 0.0, 1.0]);
+                let e = self.shape(i).support(&Vector3::z());
                 let z = self.pos[i][2];
                 for room in [z, lz - z] {
                     if room < e {
@@ -284,8 +285,8 @@ impl Relaxer {
     /// force-balanced with overlaps left, or `max_iter` steps.
     pub(crate) fn relax(&mut self, tol: f64, max_iter: usize) -> Outcome {
         let n = self.pos.len();
-        let mut vel = vec![[0.0; 3]; n];
-        let mut omega = vec![[0.0; 3]; n];
+        let mut vel = vec![Vector3::zeros(); n];
+        let mut omega = vec![Vector3::zeros(); n];
         let mut dt = DT_START;
         let mut alpha = ALPHA_START;
         let mut positive = 0usize;
@@ -302,10 +303,10 @@ impl Relaxer {
             let mut f2 = 0.0;
             for i in 0..n {
                 let f = self.force[i];
-                let q = scale(1.0 / lever[i], self.torque[i]);
-                fmax2 = fmax2.max(dot(f, f)).max(dot(q, q));
-                power += dot(f, vel[i]) + dot(q, omega[i]);
-                f2 += dot(f, f) + dot(q, q);
+                let q = self.torque[i] * (1.0 / lever[i]);
+                fmax2 = fmax2.max(f.norm_squared()).max(q.norm_squared());
+                power += f.dot(&vel[i]) + q.dot(&omega[i]);
+                f2 += f.norm_squared() + q.norm_squared();
             }
             if fmax2.sqrt() <= JAM_RATIO * eval.max_overlap {
                 return Outcome::Stuck;
@@ -321,35 +322,35 @@ impl Relaxer {
                 dt = (dt * F_DEC).max(DT_MIN);
                 alpha = ALPHA_START;
                 for i in 0..n {
-                    self.pos[i] = sub(self.pos[i], scale(0.5 * dt, vel[i]));
+                    self.pos[i] -= vel[i] * (0.5 * dt);
                     if self.rotations {
-                        let back = scale(-0.5 * dt / lever[i], omega[i]);
-                        self.axis[i] = unit(rotate(self.axis[i], back));
+                        let back = omega[i] * (-0.5 * dt / lever[i]);
+                        self.axis[i] = turned(&self.axis[i], &back);
                     }
-                    vel[i] = [0.0; 3];
-                    omega[i] = [0.0; 3];
+                    vel[i] = Vector3::zeros();
+                    omega[i] = Vector3::zeros();
                 }
             }
             // Semi-implicit Euler with FIRE mixing.
             let mut v2 = 0.0;
             for i in 0..n {
-                vel[i] = add(vel[i], scale(dt, self.force[i]));
-                omega[i] = add(omega[i], scale(dt / lever[i], self.torque[i]));
-                v2 += dot(vel[i], vel[i]) + dot(omega[i], omega[i]);
+                vel[i] += self.force[i] * dt;
+                omega[i] += self.torque[i] * (dt / lever[i]);
+                v2 += vel[i].norm_squared() + omega[i].norm_squared();
             }
             if f2 > 0.0 {
                 let mix = alpha * (v2 / f2).sqrt();
                 for i in 0..n {
-                    vel[i] = add(scale(1.0 - alpha, vel[i]), scale(mix, self.force[i]));
-                    let q = scale(1.0 / lever[i], self.torque[i]);
-                    omega[i] = add(scale(1.0 - alpha, omega[i]), scale(mix, q));
+                    vel[i] = vel[i] * (1.0 - alpha) + self.force[i] * mix;
+                    let q = self.torque[i] * (1.0 / lever[i]);
+                    omega[i] = omega[i] * (1.0 - alpha) + q * mix;
                 }
             }
             for i in 0..n {
-                self.pos[i] = add(self.pos[i], scale(dt, vel[i]));
+                self.pos[i] += vel[i] * dt;
                 if self.rotations {
-                    let turn = scale(dt / lever[i], omega[i]);
-                    self.axis[i] = unit(rotate(self.axis[i], turn));
+                    let turn = omega[i] * (dt / lever[i]);
+                    self.axis[i] = turned(&self.axis[i], &turn);
                 }
             }
         }
@@ -362,9 +363,13 @@ impl Relaxer {
     }
 }
 
-/// `v / |v|`.
-pub(crate) fn unit(v: V3) -> V3 {
-    scale(1.0 / norm(v), v)
+/// The unit vector `axis` rotated by the rotation vector `phi` (angle
+/// `|phi|` rad about `phi / |phi|`), normalised again so that many small
+/// turns do not let its length drift.
+pub(crate) fn turned(axis: &UnitVector3<f64>, phi: &Vector3<f64>) -> UnitVector3<f64> {
+    let mut u = Rotation3::new(*phi) * *axis;
+    u.renormalize();
+    u
 }
 
 #[cfg(test)]
@@ -379,7 +384,7 @@ mod tests {
     fn forces_and_torques_are_the_energy_gradient() {
         let mut rng = crate::distribution::stream(11, 9);
         let n = 12;
-        let lengths = [3.0, 3.5, 3.2];
+        let lengths = Vector3::new(3.0, 3.5, 3.2);
         let cell = Cell::new(lengths, Boundary::Die);
         let base: Vec<(f64, f64)> = (0..n)
             .map(|k| {
@@ -390,22 +395,22 @@ mod tests {
                 }
             })
             .collect();
-        let pos: Vec<V3> = (0..n)
+        let pos: Vec<Vector3<f64>> = (0..n)
             .map(|_| {
-                [
+                Vector3::new(
                     lengths[0] * rng.random::<f64>(),
                     lengths[1] * rng.random::<f64>(),
                     -0.2 + (lengths[2] + 0.4) * rng.random::<f64>(),
-                ]
+                )
             })
             .collect();
-        let axis: Vec<V3> = (0..n)
+        let axis: Vec<UnitVector3<f64>> = (0..n)
             .map(|_| {
-                unit([
+                UnitVector3::new_normalize(Vector3::new(
                     rng.random::<f64>() - 0.5,
                     rng.random::<f64>() - 0.5,
                     rng.random::<f64>() - 0.5,
-                ])
+                ))
             })
             .collect();
         let mut sys = Relaxer::new(cell, true, base, pos, axis);
@@ -420,41 +425,32 @@ mod tests {
             .count();
         assert!(walls > 0);
         let (force, torque) = (sys.force.clone(), sys.torque.clone());
-        let energy = |sys: &mut Relaxer| {
-            // Same pair list (no rebuild): small moves only.
-            sys.evaluate().energy
-        };
         let eps = 1e-6;
+        // Minus the central difference of the energy under the move
+        // `set(sys, ±eps)`, the same pair list kept (small moves only).
+        let minus_slope = |sys: &mut Relaxer, set: &dyn Fn(&mut Relaxer, f64)| {
+            set(sys, eps);
+            let up = sys.evaluate().energy;
+            set(sys, -eps);
+            let down = sys.evaluate().energy;
+            -(up - down) / (2.0 * eps)
+        };
         let mut checked = 0;
         for i in 0..n {
             for k in 0..3 {
-                let x0 = sys.pos[i];
-                sys.pos[i][k] = x0[k] + eps;
-                let up = energy(&mut sys);
-                sys.pos[i][k] = x0[k] - eps;
-                let down = energy(&mut sys);
+                let (x0, u0) = (sys.pos[i], sys.axis[i]);
+                let fd_force = minus_slope(&mut sys, &|s, t| s.pos[i][k] = x0[k] + t);
                 sys.pos[i] = x0;
-                let fd = -(up - down) / (2.0 * eps);
-                assert!(
-                    (fd - force[i][k]).abs() < 1e-6,
-                    "force {i} {k}: {fd} vs {}",
-                    force[i][k]
-                );
-                let u0 = sys.axis[i];
-                let mut turn = [0.0; 3];
-                turn[k] = eps;
-                sys.axis[i] = rotate(u0, turn);
-                let up = energy(&mut sys);
-                turn[k] = -eps;
-                sys.axis[i] = rotate(u0, turn);
-                let down = energy(&mut sys);
+                let fd_torque = minus_slope(&mut sys, &|s, t| {
+                    s.axis[i] = Rotation3::new(Vector3::ith(k, t)) * u0;
+                });
                 sys.axis[i] = u0;
-                let fd = -(up - down) / (2.0 * eps);
-                assert!(
-                    (fd - torque[i][k]).abs() < 1e-6,
-                    "torque {i} {k}: {fd} vs {}",
-                    torque[i][k]
-                );
+                for (name, fd, exact) in [
+                    ("force", fd_force, force[i][k]),
+                    ("torque", fd_torque, torque[i][k]),
+                ] {
+                    assert!((fd - exact).abs() < 1e-6, "{name} {i} {k}: {fd} vs {exact}");
+                }
                 if force[i][k].abs() > 1e-3 || torque[i][k].abs() > 1e-3 {
                     checked += 1;
                 }

@@ -11,11 +11,13 @@ mod cell;
 mod convert;
 mod errors;
 mod material;
+mod packing;
 mod simulation;
 
 pub use cell::PyCell;
 pub use errors::{ConvergenceError, TidensError, UnsupportedError};
 pub use material::{PyMaterial, tmp_creep_coefficient};
+pub use packing::PyPacking;
 pub use simulation::{PySimulation, check_parameters};
 
 /// Native core of tidens (Rust, PyO3). Units: mm, N, MPa, s.
@@ -28,8 +30,8 @@ mod _core {
 
     #[pymodule_export]
     use super::{
-        ConvergenceError, PyCell, PyMaterial, PySimulation, TidensError, UnsupportedError,
-        check_parameters, tmp_creep_coefficient,
+        ConvergenceError, PyCell, PyMaterial, PyPacking, PySimulation, TidensError,
+        UnsupportedError, check_parameters, tmp_creep_coefficient,
     };
 
     #[pymodule_init]

@@ -31,7 +31,7 @@ pub(crate) const CONTACT_MODES: [(&str, ContactMode); 2] = [
 
 /// The entry of `table` called `name`, or a ValueError naming the
 /// parameter and listing the choices.
-fn named<T: Copy>(parameter: &str, name: &str, table: &[(&str, T)]) -> PyResult<T> {
+pub(crate) fn named<T: Copy>(parameter: &str, name: &str, table: &[(&str, T)]) -> PyResult<T> {
     table
         .iter()
         .find(|(n, _)| *n == name)

@@ -1,0 +1,267 @@
+//! `Packing`: a random dense packing of spheres or spheroids (the
+//! `tidens-packing` crate), generated with the GIL released or read from a
+//! file of centres, semi-axes and axes.
+
+use crate::errors::{Number, parameter_error};
+use crate::simulation::named;
+use numpy::{PyArray2, ToPyArray};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use tidens_packing::{Boundary, Packing, PackingError, PackingSpec, SizeDistribution};
+
+/// A contact as Python gets it: (i, j, image of j in box lengths, gap [mm]).
+type ContactTuple = (usize, usize, (i32, i32, i32), f64);
+
+/// The Python names of the boundaries, the default first.
+pub(crate) const BOUNDARIES: [(&str, Boundary); 2] =
+    [("periodic", Boundary::Periodic), ("die", Boundary::Die)];
+
+fn boundary(name: &str) -> PyResult<Boundary> {
+    named("boundary", name, &BOUNDARIES)
+}
+
+fn boundary_name(b: Boundary) -> &'static str {
+    BOUNDARIES
+        .iter()
+        .find(|(_, x)| *x == b)
+        .map_or("periodic", |(n, _)| n)
+}
+
+/// A packing error as a ValueError naming the Python argument (or the line
+/// and field of the text).
+fn packing_error(e: PackingError) -> PyErr {
+    match e {
+        PackingError::Parameter {
+            name,
+            value,
+            allowed,
+        } => {
+            let python = match name {
+                "mean_radius" => "mean_radius_mm",
+                "lengths[0]" => "lengths_mm[0]",
+                "lengths[1]" => "lengths_mm[1]",
+                "lengths[2]" => "lengths_mm[2]",
+                other => other,
+            };
+            parameter_error(python, Number(value), allowed)
+        }
+        other => PyValueError::new_err(other.to_string()),
+    }
+}
+
+/// A packing of spheroids in a box [0, Lx) x [0, Ly) x [0, Lz) [mm].
+///
+/// Packing.generate(particles, ...) makes a random dense one at a target
+/// relative density rho0 (overlap relaxation with box compression, the
+/// jamming protocol of O'Hern et al., Phys. Rev. E 68 (2003) 011306; the
+/// box is sized so that the density is exactly rho0, and no two particles
+/// overlap by more than 1e-6 of the mean radius). Packing.from_text(text,
+/// lengths_mm, boundary) reads one particle per line, `x y z a [c [ax ay
+/// az]]` (mm; c defaults to a, the axis to z), e.g. a packing from a DEM
+/// code; to_text() writes that format. boundary: "periodic" (periodic in x,
+/// y and z) or "die" (periodic in x and y, rigid walls at z = 0 and z = Lz).
+#[pyclass(name = "Packing", module = "tidens_rs._core", frozen)]
+#[derive(Clone, Debug)]
+pub struct PyPacking {
+    pub(crate) inner: Packing,
+}
+
+#[pymethods]
+impl PyPacking {
+    /// A random dense packing. particles in [1, 10000]; rho0 in [0.3, 0.74]
+    /// (what the relaxation can reach depends on the size distribution and
+    /// the boundary: about 0.62-0.64 for monodisperse spheres in a periodic
+    /// box, less in a die; above it a ValueError says the density reached);
+    /// mean_radius_mm: number mean of the volume-equivalent radius
+    /// (a^2 c)^(1/3) [mm]; aspect_ratio c/a in [0.2, 5] (c along each
+    /// particle's random axis); size_ratio (large/small radius, in (1, 10])
+    /// with small_fraction (number fraction of small particles, in [0, 1])
+    /// for a bimodal distribution, or sigma (standard deviation of
+    /// ln(radius), in (0, 1]) for a lognormal one, neither for monodisperse;
+    /// box_aspect: the box's relative side lengths; seed: the same arguments
+    /// and seed give the same packing on every machine.
+    #[staticmethod]
+    #[pyo3(signature = (
+        particles,
+        *,
+        rho0 = 0.6,
+        mean_radius_mm = 0.05,
+        aspect_ratio = 1.0,
+        size_ratio = None,
+        small_fraction = 0.5,
+        sigma = None,
+        boundary = "periodic",
+        box_aspect = (1.0, 1.0, 1.0),
+        seed = 0,
+    ))]
+    #[allow(clippy::too_many_arguments)]
+    fn generate(
+        py: Python<'_>,
+        particles: i64,
+        rho0: f64,
+        mean_radius_mm: f64,
+        aspect_ratio: f64,
+        size_ratio: Option<f64>,
+        small_fraction: f64,
+        sigma: Option<f64>,
+        boundary: &str,
+        box_aspect: (f64, f64, f64),
+        seed: u64,
+    ) -> PyResult<Self> {
+        let count = usize::try_from(particles)
+            .map_err(|_| parameter_error("particles", particles, "in [1, 10000]"))?;
+        let distribution = match (size_ratio, sigma) {
+            (Some(_), Some(_)) => {
+                return Err(PyValueError::new_err(
+                    "size_ratio and sigma are both given: size_ratio (with small_fraction) \
+                     makes a bimodal distribution, sigma a lognormal one; give one or neither",
+                ));
+            }
+            (Some(size_ratio), None) => SizeDistribution::Bimodal {
+                size_ratio,
+                small_fraction,
+            },
+            (None, Some(sigma)) => SizeDistribution::Lognormal { sigma },
+            (None, None) => SizeDistribution::Monodisperse,
+        };
+        let spec = PackingSpec {
+            particles: count,
+            distribution,
+            aspect_ratio,
+            mean_radius: mean_radius_mm,
+            rho0,
+            boundary: self::boundary(boundary)?,
+            box_aspect: [box_aspect.0, box_aspect.1, box_aspect.2],
+            seed,
+        };
+        spec.validate().map_err(packing_error)?;
+        let inner = py
+            .detach(move || Packing::generate(&spec))
+            .map_err(packing_error)?;
+        Ok(Self { inner })
+    }
+
+    /// Reads a packing (format in the class docstring) in the box
+    /// lengths_mm with the given boundary. A ValueError names the line and
+    /// field of an unreadable line, a particle crossing a die wall, or two
+    /// particles that overlap (more than 1e-6 of the smaller radius).
+    #[staticmethod]
+    #[pyo3(signature = (text, lengths_mm, boundary = "periodic"))]
+    fn from_text(text: &str, lengths_mm: (f64, f64, f64), boundary: &str) -> PyResult<Self> {
+        let lengths = [lengths_mm.0, lengths_mm.1, lengths_mm.2];
+        let inner =
+            Packing::from_text(text, lengths, self::boundary(boundary)?).map_err(packing_error)?;
+        Ok(Self { inner })
+    }
+
+    /// The packing as text, one particle per line (`x y z a c ax ay az`,
+    /// mm); from_text reads it back.
+    fn to_text(&self) -> String {
+        self.inner.to_text()
+    }
+
+    /// Box side lengths (Lx, Ly, Lz) [mm].
+    #[getter]
+    fn lengths_mm(&self) -> (f64, f64, f64) {
+        let [x, y, z] = self.inner.lengths;
+        (x, y, z)
+    }
+
+    /// "periodic" or "die".
+    #[getter]
+    fn boundary(&self) -> &'static str {
+        boundary_name(self.inner.boundary)
+    }
+
+    /// Particle volume over box volume.
+    #[getter]
+    fn rel_density(&self) -> f64 {
+        self.inner.rel_density()
+    }
+
+    /// Particle centres [mm], shape (N, 3).
+    #[getter]
+    fn centres_mm<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let rows: Vec<f64> = self.inner.particles.iter().flat_map(|p| p.centre).collect();
+        numpy::ndarray::Array2::from_shape_vec((self.inner.particles.len(), 3), rows)
+            .expect("three coordinates a particle")
+            .to_pyarray(py)
+    }
+
+    /// Semi-axes (a, c) [mm], shape (N, 2): a across the axis, c along it.
+    #[getter]
+    fn semi_axes_mm<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let rows: Vec<f64> = self
+            .inner
+            .particles
+            .iter()
+            .flat_map(|p| [p.a, p.c])
+            .collect();
+        numpy::ndarray::Array2::from_shape_vec((self.inner.particles.len(), 2), rows)
+            .expect("two semi-axes a particle")
+            .to_pyarray(py)
+    }
+
+    /// Unit axes of the particles (the direction of c), shape (N, 3).
+    #[getter]
+    fn axes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let rows: Vec<f64> = self.inner.particles.iter().flat_map(|p| p.axis).collect();
+        numpy::ndarray::Array2::from_shape_vec((self.inner.particles.len(), 3), rows)
+            .expect("three components an axis")
+            .to_pyarray(py)
+    }
+
+    /// Particle-particle contacts: (i, j, image, gap_mm) for every pair
+    /// (periodic images included; image in box lengths) whose surface gap
+    /// is at most tolerance_mm (overlaps included), i <= j.
+    fn contacts(&self, tolerance_mm: f64) -> PyResult<Vec<ContactTuple>> {
+        check_tolerance(tolerance_mm)?;
+        Ok(self
+            .inner
+            .contacts(tolerance_mm)
+            .into_iter()
+            .map(|c| (c.i, c.j, (c.image[0], c.image[1], c.image[2]), c.gap))
+            .collect())
+    }
+
+    /// Mean number of particle-particle contacts per particle (gap at most
+    /// tolerance_mm), 2 x contacts / particles; die walls are not counted
+    /// and rattlers are not removed.
+    fn coordination_number(&self, tolerance_mm: f64) -> PyResult<f64> {
+        check_tolerance(tolerance_mm)?;
+        Ok(self.inner.coordination_number(tolerance_mm))
+    }
+
+    /// Largest overlap depth [mm] between two particles or of a particle
+    /// across a die wall; 0 when nothing overlaps.
+    #[getter]
+    fn max_overlap_mm(&self) -> f64 {
+        self.inner.max_overlap()
+    }
+
+    fn __len__(&self) -> usize {
+        self.inner.particles.len()
+    }
+
+    fn __repr__(&self) -> String {
+        let [x, y, z] = self.inner.lengths;
+        format!(
+            "Packing({} particles, {} box {x:.6} x {y:.6} x {z:.6} mm, rho = {:.6})",
+            self.inner.particles.len(),
+            boundary_name(self.inner.boundary),
+            self.inner.rel_density()
+        )
+    }
+}
+
+fn check_tolerance(tolerance_mm: f64) -> PyResult<()> {
+    if tolerance_mm.is_finite() && tolerance_mm >= 0.0 {
+        Ok(())
+    } else {
+        Err(parameter_error(
+            "tolerance_mm",
+            Number(tolerance_mm),
+            "finite and >= 0 mm",
+        ))
+    }
+}
