@@ -94,6 +94,22 @@ def test_a_packing_file_round_trips_with_its_box(tmp_path: Path) -> None:
     assert q.rel_density == pytest.approx(p.rel_density, rel=1e-14)
 
 
+def test_a_jammed_packing_is_isostatic_without_its_rattlers() -> None:
+    # Frictionless spheres jam isostatic: 3(N' - 1) + 1 contacts among the
+    # N' particles held by 4 or more, about 6 per particle.
+    p = td.Packing.generate(32, rho0=0.74, seed=0, jam=True)
+    assert 0.62 <= p.rel_density <= 0.67
+    assert p.max_overlap_mm <= 1e-6 * R
+    assert pk.mean_radius_mm(p) == pytest.approx(R, rel=1e-12)
+    z_all = pk.coordination_number(p)
+    z = pk.coordination_number(p, without_rattlers=True)
+    assert 5.75 <= z <= 6.1 and z >= z_all
+    # The contacts are separated from the other neighbours by decades.
+    assert pk.coordination_number(p, relative_tolerance=1e-6, without_rattlers=True) == z
+    # A packing below jamming barely touches.
+    assert pk.coordination_number(td.Packing.generate(32, rho0=0.6, seed=0), without_rattlers=True) < 1.0
+
+
 def test_densities_beyond_jamming_are_refused_with_the_density_reached() -> None:
     with pytest.raises(ValueError, match=r"rho0 = 0.7: not reached, the packing jammed at a relative density of 0\.6"):
         td.Packing.generate(8, rho0=0.7, seed=0)
@@ -149,3 +165,7 @@ def test_the_pack_command_writes_the_packing_it_reports(tmp_path: Path) -> None:
     assert bad.returncode == 2 and "--particles = 0: must be in [1, 10000]" in bad.stderr and bad.stderr.count("\n") == 1
     dense = subprocess.run([*cmd[:7], "0.8", "--out", str(out)], capture_output=True, text=True)
     assert dense.returncode == 2 and "--rho0 = 0.8: must be in [0.3, 0.74]" in dense.stderr
+    jammed = subprocess.run([*cmd[:6], "--jam", "--out", str(out)], capture_output=True, text=True, check=True)
+    p = pk.read(out)
+    assert f"rho0 = {p.rel_density:.6f}" in jammed.stdout and p.rel_density > 0.6
+    assert f"({pk.coordination_number(p, without_rattlers=True):.3f} without rattlers" in jammed.stdout

@@ -134,8 +134,10 @@ class Packing:
         boundary: str = "periodic",
         box_aspect: tuple[float, float, float] = ...,
         seed: int = 0,
+        jam: bool = False,
     ) -> Packing:
-        """A random dense packing at relative density rho0 (ValueError naming the parameter)."""
+        """A random dense packing at relative density rho0 (ValueError naming the parameter);
+        jam=True: where it jams below rho0, the densest state reached."""
     @staticmethod
     def from_text(text: str, lengths_mm: tuple[float, float, float], boundary: str = "periodic") -> Packing:
         """Reads `x y z a [c [ax ay az]]` lines (mm) in the box lengths_mm."""
@@ -154,6 +156,7 @@ class Packing:
     def axes(self) -> npt.NDArray[np.float64]: ...
     def contacts(self, tolerance_mm: float) -> list[tuple[int, int, tuple[int, int, int], float]]: ...
     def coordination_number(self, tolerance_mm: float) -> float: ...
+    def backbone_coordination_number(self, tolerance_mm: float) -> float: ...
     @property
     def max_overlap_mm(self) -> float: ...
     def __len__(self) -> int: ...

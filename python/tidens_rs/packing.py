@@ -28,10 +28,10 @@ from ._core import Packing
 __all__ = ["COORDINATION_TOLERANCE", "Packing", "coordination_number", "mean_radius_mm", "read", "write"]
 
 #: Default gap tolerance of a contact, as a fraction of the mean
-#: volume-equivalent radius: the generator leaves touching particles apart
-#: by far less (it shrinks a jammed state until no overlap is left), and
-#: near neighbours of a packing below jamming farther.
-COORDINATION_TOLERANCE = 1e-3
+#: volume-equivalent radius. In jammed packings (``Packing.generate(..., jam=True)``) touching
+#: particles are apart by at most 1.6e-7 of it and the next neighbours by
+#: at least 2.7e-5 (32 spheres, 20 seeds).
+COORDINATION_TOLERANCE = 1e-5
 
 _HEADER = re.compile(
     r"^#\s*tidens packing:\s*lengths_mm\s*=\s*(\S+)\s+(\S+)\s+(\S+)\s*;\s*boundary\s*=\s*(\w+)", re.MULTILINE
@@ -46,13 +46,18 @@ def mean_radius_mm(packing: Packing) -> float:
     return float(np.mean(np.cbrt(ac[:, 0] ** 2 * ac[:, 1])))
 
 
-def coordination_number(packing: Packing, relative_tolerance: float = COORDINATION_TOLERANCE) -> float:
+def coordination_number(
+    packing: Packing, relative_tolerance: float = COORDINATION_TOLERANCE, without_rattlers: bool = False
+) -> float:
     """Mean contacts per particle, a contact being a surface gap of at most
     ``relative_tolerance`` times the mean volume-equivalent radius (die
-    walls not counted, rattlers not removed)."""
+    walls not counted). ``without_rattlers``: over the particles held by at
+    least 4 contacts, removed round after round (a die wall counts)."""
     tol = _checks.real("relative_tolerance", relative_tolerance)
     if tol < 0.0:
         raise ValueError(f"relative_tolerance = {relative_tolerance!r}: must be >= 0")
+    if _checks.flag("without_rattlers", without_rattlers):
+        return packing.backbone_coordination_number(tol * mean_radius_mm(packing))
     return packing.coordination_number(tol * mean_radius_mm(packing))
 
 

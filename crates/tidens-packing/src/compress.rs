@@ -9,7 +9,10 @@
 //! and halved; when the step falls below [`STEP_MIN`] the packing is jammed
 //! below the target: it is then decompressed by [`SHAKE_DECOMPRESSION`],
 //! shaken (random displacements and rotations) and compressed again, at most
-//! [`MAX_SHAKES`] times.
+//! [`MAX_SHAKES`] times. When asked to, the densest state is then refined:
+//! its jamming point is located with steps down to [`REFINE_STEP_MIN`] and
+//! overlaps relaxed to [`REFINE_TOLERANCE`] times the tolerance, and the last
+//! jammed state, shrunk until no overlap is left, is kept.
 
 use nalgebra::{UnitVector3, Vector3};
 use rand::Rng;
@@ -32,6 +35,11 @@ const SHAKE_DECOMPRESSION: f64 = 0.03;
 const SHAKE_DISPLACEMENT: f64 = 1.0;
 /// Largest random rotation of a shake \[rad\].
 const SHAKE_ROTATION: f64 = 0.3;
+/// Smallest density increment of the refinement of a jammed packing.
+const REFINE_STEP_MIN: f64 = 1e-8;
+/// Largest overlap accepted in the refinement, relative to
+/// [`Problem::tolerance`].
+const REFINE_TOLERANCE: f64 = 1e-3;
 /// FIRE steps per stage, at most.
 const MAX_ITERATIONS: usize = 20_000;
 
@@ -63,21 +71,171 @@ fn random_unit(rng: &mut ChaCha8Rng) -> UnitVector3<f64> {
     }
 }
 
-/// Compresses the particles to `rho0`: the relaxed centres and axes with the
-/// densest relative density below `rho0` reached on the way, or (error) the
-/// densest relative density at which an overlap-free packing was found.
-pub(crate) fn compress(problem: &Problem, rng: &mut ChaCha8Rng) -> Result<(Snapshot, f64), f64> {
-    let rho0 = problem.rho0;
-    let scale_at = |phi: f64| {
-        if phi >= rho0 {
-            1.0
-        } else {
-            (phi / rho0).cbrt()
+/// What [`compress`] found: the state at `rho0`, or the densest overlap-free
+/// state below it (refined: the last jammed state, shrunk).
+pub(crate) struct Compressed {
+    /// Its centres \[mm\] and axes, in the box of the problem.
+    pub(crate) state: Snapshot,
+    /// Its particle scale `s = (density / rho0)^(1/3)`: 1 when `rho0` was
+    /// reached.
+    pub(crate) scale: f64,
+    /// Its relative density in the box of the problem, at most `rho0`.
+    pub(crate) density: f64,
+    /// The densest relative density below `rho0` at which a state was
+    /// accepted (`density` itself when `rho0` was not reached).
+    pub(crate) below: f64,
+}
+
+/// Particle scale at the relative density `phi` in the box sized for `rho0`
+/// (1 from `rho0` on).
+fn scale_at(phi: f64, rho0: f64) -> f64 {
+    if phi >= rho0 {
+        1.0
+    } else {
+        (phi / rho0).cbrt()
+    }
+}
+
+/// The state of a compression: the relaxer, the last good (relaxed) state
+/// and the densest one.
+struct Compressor<'a> {
+    problem: &'a Problem,
+    relaxer: Relaxer,
+    /// Relative density of `good`.
+    phi_good: f64,
+    /// The last state accepted.
+    good: Snapshot,
+    /// Relative density of `best`.
+    phi_best: f64,
+    /// The densest state accepted.
+    best: Snapshot,
+    /// The densest relative density below `rho0` accepted.
+    below: f64,
+    /// The last jammed state, shrunk until no overlap is left: its relative
+    /// density and (unrelaxed) centres and axes.
+    jammed: Option<(f64, Snapshot)>,
+    /// Shakes done.
+    shakes: usize,
+}
+
+impl Compressor<'_> {
+    fn scale_at(&self, phi: f64) -> f64 {
+        scale_at(phi, self.problem.rho0)
+    }
+
+    /// Relaxes the current configuration at `phi` down to a largest overlap
+    /// of `tol`; when it relaxes, it becomes the good state (and the best one
+    /// when denser).
+    fn accept(&mut self, phi: f64, tol: f64) -> bool {
+        self.relaxer.set_scale(self.scale_at(phi));
+        if self.relaxer.relax(tol, MAX_ITERATIONS) != Outcome::Relaxed {
+            return false;
         }
-    };
+        self.phi_good = phi;
+        self.good = self.relaxer.snapshot();
+        if phi > self.phi_best {
+            self.phi_best = phi;
+            self.best.clone_from(&self.good);
+        }
+        if phi < self.problem.rho0 {
+            self.below = self.below.max(phi);
+        }
+        true
+    }
+
+    /// Grows the particles from the good state by density steps of `step`
+    /// (at most [`STEP_MAX`], growing after each success) toward `rho0`,
+    /// relaxing to `tol`. A step that jams is undone and halved; the jammed
+    /// state shrunk until no overlap is left is accepted when it is denser
+    /// than the good state. True when `rho0` is reached, false once the step
+    /// falls below `step_min`.
+    fn climb(&mut self, mut step: f64, step_min: f64, tol: f64) -> bool {
+        let rho0 = self.problem.rho0;
+        loop {
+            let phi = (self.phi_good + step).min(rho0);
+            if self.accept(phi, tol) {
+                if phi >= rho0 {
+                    return true;
+                }
+                step = (step * 1.5).min(STEP_MAX);
+                continue;
+            }
+            // Jammed at phi: shrinking the particles until no overlap is
+            // left gives an overlap-free packing just below the jamming
+            // density.
+            let s_free = self.relaxer.overlap_free_scale() * (1.0 - 1e-12);
+            let phi_free = rho0 * s_free * s_free * s_free;
+            self.jammed = Some((phi_free, self.relaxer.snapshot()));
+            if phi_free > self.phi_good {
+                self.accept(phi_free, tol);
+            }
+            self.relaxer.restore(&self.good);
+            step = 0.5 * (phi - self.phi_good).min(step);
+            if step < step_min {
+                return false;
+            }
+        }
+    }
+
+    /// Decompresses the good state by [`SHAKE_DECOMPRESSION`], shakes it and
+    /// relaxes it. A shaken state that cannot be relaxed counts as a shake
+    /// and the next one starts again from the good state. False once
+    /// [`MAX_SHAKES`] are used up.
+    fn shake(&mut self, rng: &mut ChaCha8Rng) -> bool {
+        let problem = self.problem;
+        loop {
+            self.shakes += 1;
+            if self.shakes > MAX_SHAKES {
+                return false;
+            }
+            self.relaxer.restore(&self.good);
+            let phi_shaken =
+                (self.phi_good - SHAKE_DECOMPRESSION).max(START_DENSITY.min(problem.rho0));
+            let s = self.scale_at(phi_shaken);
+            self.relaxer.set_scale(s);
+            let kick = SHAKE_DISPLACEMENT * problem.mean_radius * s;
+            let relaxer = &mut self.relaxer;
+            for i in 0..relaxer.pos.len() {
+                for k in 0..3 {
+                    relaxer.pos[i][k] += kick * (2.0 * rng.random::<f64>() - 1.0);
+                }
+                let (a, c) = problem.semi_axes[i];
+                if a != c {
+                    let turn = random_unit(rng);
+                    let angle = SHAKE_ROTATION * rng.random::<f64>();
+                    relaxer.axis[i] = turned(&relaxer.axis[i], &(turn.into_inner() * angle));
+                }
+            }
+            if self.accept(phi_shaken, problem.tolerance) {
+                return true;
+            }
+        }
+    }
+
+    fn result(self) -> Compressed {
+        Compressed {
+            scale: self.scale_at(self.phi_best),
+            density: self.phi_best,
+            below: self.below,
+            state: self.best,
+        }
+    }
+}
+
+/// Compresses the particles toward `rho0`: the relaxed centres and axes at
+/// `rho0`, or, when the packing jams below it, the densest overlap-free
+/// state found (with `refine`, the jamming point of that state is then
+/// located to a density step of [`REFINE_STEP_MIN`]). None when the random
+/// start cannot be relaxed.
+pub(crate) fn compress(
+    problem: &Problem,
+    rng: &mut ChaCha8Rng,
+    refine: bool,
+) -> Option<Compressed> {
+    let rho0 = problem.rho0;
     let l = problem.cell.lengths;
-    let mut phi_good = START_DENSITY.min(rho0);
-    let s0 = scale_at(phi_good);
+    let phi_start = START_DENSITY.min(rho0);
+    let s0 = scale_at(phi_start, rho0);
     let mut pos = Vec::with_capacity(problem.semi_axes.len());
     let mut axis = Vec::with_capacity(problem.semi_axes.len());
     for &(a, c) in &problem.semi_axes {
@@ -96,85 +254,61 @@ pub(crate) fn compress(problem: &Problem, rng: &mut ChaCha8Rng) -> Result<(Snaps
             random_unit(rng)
         });
     }
-    let mut relaxer = Relaxer::new(
+    let relaxer = Relaxer::new(
         problem.cell,
         problem.die,
         problem.semi_axes.clone(),
         pos,
         axis,
     );
-    let tol = problem.tolerance;
-    relaxer.set_scale(s0);
-    if relaxer.relax(tol, MAX_ITERATIONS) != Outcome::Relaxed {
-        return Err(0.0);
+    let start = relaxer.snapshot();
+    let mut c = Compressor {
+        problem,
+        relaxer,
+        phi_good: 0.0,
+        good: start.clone(),
+        phi_best: 0.0,
+        best: start,
+        below: 0.0,
+        jammed: None,
+        shakes: 0,
+    };
+    if !c.accept(phi_start, problem.tolerance) {
+        return None;
     }
-    if phi_good >= rho0 {
-        return Ok((relaxer.snapshot(), phi_good));
+    if phi_start >= rho0 {
+        return Some(c.result());
     }
-    let mut good = relaxer.snapshot();
-    let mut best = phi_good;
     let mut step = STEP_MAX;
-    let mut shakes = 0;
     loop {
-        let phi = (phi_good + step).min(rho0);
-        relaxer.set_scale(scale_at(phi));
-        if relaxer.relax(tol, MAX_ITERATIONS) == Outcome::Relaxed {
-            if phi >= rho0 {
-                return Ok((relaxer.snapshot(), best));
-            }
-            phi_good = phi;
-            best = best.max(phi);
-            good = relaxer.snapshot();
-            step = (step * 1.5).min(STEP_MAX);
-            continue;
+        if c.climb(step, STEP_MIN, problem.tolerance) {
+            return Some(c.result());
         }
-        // Jammed at phi: shrinking the particles until no overlap is left
-        // gives an overlap-free packing just below the jamming density.
-        let s_free = relaxer.overlap_free_scale() * (1.0 - 1e-12);
-        let phi_free = rho0 * s_free * s_free * s_free;
-        if phi_free > phi_good {
-            relaxer.set_scale(scale_at(phi_free));
-            if relaxer.relax(tol, MAX_ITERATIONS) == Outcome::Relaxed {
-                phi_good = phi_free;
-                best = best.max(phi_free);
-                good = relaxer.snapshot();
-            }
-        }
-        relaxer.restore(&good);
-        step = 0.5 * (phi - phi_good).min(step);
-        if step >= STEP_MIN {
-            continue;
-        }
-        // Jammed below rho0: decompress, shake, compress again. A shaken
-        // state that cannot be relaxed counts as a shake and the next one
-        // starts again from the last good state.
-        loop {
-            shakes += 1;
-            if shakes > MAX_SHAKES {
-                return Err(best);
-            }
-            relaxer.restore(&good);
-            let phi_shaken = (phi_good - SHAKE_DECOMPRESSION).max(START_DENSITY.min(rho0));
-            let s = scale_at(phi_shaken);
-            relaxer.set_scale(s);
-            let kick = SHAKE_DISPLACEMENT * problem.mean_radius * s;
-            for i in 0..relaxer.pos.len() {
-                for k in 0..3 {
-                    relaxer.pos[i][k] += kick * (2.0 * rng.random::<f64>() - 1.0);
-                }
-                let (a, c) = problem.semi_axes[i];
-                if a != c {
-                    let turn = random_unit(rng);
-                    let angle = SHAKE_ROTATION * rng.random::<f64>();
-                    relaxer.axis[i] = turned(&relaxer.axis[i], &(turn.into_inner() * angle));
-                }
-            }
-            if relaxer.relax(tol, MAX_ITERATIONS) == Outcome::Relaxed {
-                phi_good = phi_shaken;
-                good = relaxer.snapshot();
-                break;
-            }
+        // Jammed below rho0: decompress, shake, compress again.
+        if !c.shake(rng) {
+            break;
         }
         step = 0.1 * STEP_MAX;
     }
+    if refine {
+        // Locate the jamming point of the densest state with finer steps and
+        // a tighter tolerance, and keep the last jammed state (shrunk until
+        // no overlap is left): its contacts are closed to the final step.
+        let tol = REFINE_TOLERANCE * problem.tolerance;
+        c.relaxer.restore(&c.best);
+        c.good.clone_from(&c.best);
+        c.phi_good = c.phi_best;
+        c.jammed = None;
+        if !c.climb(STEP_MIN, REFINE_STEP_MIN, tol)
+            && let Some((phi, state)) = c.jammed.take()
+        {
+            c.relaxer.restore(&state);
+            c.relaxer.set_scale(c.scale_at(phi));
+            if c.relaxer.relax(tol, MAX_ITERATIONS) == Outcome::Relaxed {
+                c.phi_best = phi;
+                c.best = c.relaxer.snapshot();
+            }
+        }
+    }
+    Some(c.result())
 }

@@ -49,6 +49,49 @@ fn packing_error(e: PackingError) -> PyErr {
     }
 }
 
+/// The core's spec from the Python arguments, checked (a ValueError naming
+/// the argument). `sizes`: size_ratio, small_fraction, sigma.
+#[allow(clippy::too_many_arguments)]
+fn spec(
+    particles: i64,
+    rho0: f64,
+    mean_radius_mm: f64,
+    aspect_ratio: f64,
+    sizes: (Option<f64>, f64, Option<f64>),
+    boundary: &str,
+    box_aspect: (f64, f64, f64),
+    seed: u64,
+) -> PyResult<PackingSpec> {
+    let count = usize::try_from(particles)
+        .map_err(|_| parameter_error("particles", particles, "in [1, 10000]"))?;
+    let distribution = match sizes {
+        (Some(_), _, Some(_)) => {
+            return Err(PyValueError::new_err(
+                "size_ratio and sigma are both given: size_ratio (with small_fraction) \
+                 makes a bimodal distribution, sigma a lognormal one; give one or neither",
+            ));
+        }
+        (Some(size_ratio), small_fraction, None) => SizeDistribution::Bimodal {
+            size_ratio,
+            small_fraction,
+        },
+        (None, _, Some(sigma)) => SizeDistribution::Lognormal { sigma },
+        (None, _, None) => SizeDistribution::Monodisperse,
+    };
+    let spec = PackingSpec {
+        particles: count,
+        distribution,
+        aspect_ratio,
+        mean_radius: mean_radius_mm,
+        rho0,
+        boundary: self::boundary(boundary)?,
+        box_aspect: [box_aspect.0, box_aspect.1, box_aspect.2],
+        seed,
+    };
+    spec.validate().map_err(packing_error)?;
+    Ok(spec)
+}
+
 /// A packing of spheroids in a box [0, Lx) x [0, Ly) x [0, Lz) [mm].
 ///
 /// Packing.generate(particles, ...) makes a random dense one at a target
@@ -70,8 +113,9 @@ pub struct PyPacking {
 impl PyPacking {
     /// A random dense packing. particles in [1, 10000]; rho0 in [0.3, 0.74]
     /// (what the relaxation can reach depends on the size distribution and
-    /// the boundary: about 0.62-0.64 for monodisperse spheres in a periodic
-    /// box, less in a die; above it a ValueError says the density reached);
+    /// the boundary: about 0.64-0.69 for monodisperse spheres in a periodic
+    /// box, less in a die; above it a ValueError says the density reached,
+    /// or jam=True returns that densest packing);
     /// mean_radius_mm: number mean of the volume-equivalent radius
     /// (a^2 c)^(1/3) [mm]; aspect_ratio c/a in [0.2, 5] (c along each
     /// particle's random axis); size_ratio (large/small radius, in (1, 10])
@@ -79,7 +123,15 @@ impl PyPacking {
     /// for a bimodal distribution, or sigma (standard deviation of
     /// ln(radius), in (0, 1]) for a lognormal one, neither for monodisperse;
     /// box_aspect: the box's relative side lengths; seed: the same arguments
-    /// and seed give the same packing on every machine.
+    /// and seed give the same packing on every machine. Below jamming few
+    /// particles touch. jam: where the packing jams below rho0, the
+    /// densest overlap-free state found instead of the refusal, refined
+    /// until touching particles are apart by less than 1e-6 of the mean
+    /// radius, the particles' sizes kept and the box scaled to the density
+    /// reached (rel_density); frictionless jammed packings are isostatic,
+    /// about 6 contacts per sphere without rattlers. A box that fits a
+    /// crystal (32 spheres in a cube fit fcc) can crystallise and reach
+    /// rho0 itself: check the coordination number.
     #[staticmethod]
     #[pyo3(signature = (
         particles,
@@ -93,6 +145,7 @@ impl PyPacking {
         boundary = "periodic",
         box_aspect = (1.0, 1.0, 1.0),
         seed = 0,
+        jam = false,
     ))]
     #[allow(clippy::too_many_arguments)]
     fn generate(
@@ -107,37 +160,20 @@ impl PyPacking {
         boundary: &str,
         box_aspect: (f64, f64, f64),
         seed: u64,
+        jam: bool,
     ) -> PyResult<Self> {
-        let count = usize::try_from(particles)
-            .map_err(|_| parameter_error("particles", particles, "in [1, 10000]"))?;
-        let distribution = match (size_ratio, sigma) {
-            (Some(_), Some(_)) => {
-                return Err(PyValueError::new_err(
-                    "size_ratio and sigma are both given: size_ratio (with small_fraction) \
-                     makes a bimodal distribution, sigma a lognormal one; give one or neither",
-                ));
-            }
-            (Some(size_ratio), None) => SizeDistribution::Bimodal {
-                size_ratio,
-                small_fraction,
-            },
-            (None, Some(sigma)) => SizeDistribution::Lognormal { sigma },
-            (None, None) => SizeDistribution::Monodisperse,
-        };
-        let spec = PackingSpec {
-            particles: count,
-            distribution,
-            aspect_ratio,
-            mean_radius: mean_radius_mm,
+        let spec = spec(
+            particles,
             rho0,
-            boundary: self::boundary(boundary)?,
-            box_aspect: [box_aspect.0, box_aspect.1, box_aspect.2],
+            mean_radius_mm,
+            aspect_ratio,
+            (size_ratio, small_fraction, sigma),
+            boundary,
+            box_aspect,
             seed,
-        };
-        spec.validate().map_err(packing_error)?;
-        let inner = py
-            .detach(move || Packing::generate(&spec))
-            .map_err(packing_error)?;
+        )?;
+        let make = if jam { Packing::jam } else { Packing::generate };
+        let inner = py.detach(move || make(&spec)).map_err(packing_error)?;
         Ok(Self { inner })
     }
 
@@ -230,6 +266,15 @@ impl PyPacking {
     fn coordination_number(&self, tolerance_mm: f64) -> PyResult<f64> {
         check_tolerance(tolerance_mm)?;
         Ok(self.inner.coordination_number(tolerance_mm))
+    }
+
+    /// The coordination number without the rattlers: particles with fewer
+    /// than 4 contacts (gap at most tolerance_mm; a die wall counts) are
+    /// removed, round after round, and the contacts among the rest are
+    /// counted per particle left (0 when none is left).
+    fn backbone_coordination_number(&self, tolerance_mm: f64) -> PyResult<f64> {
+        check_tolerance(tolerance_mm)?;
+        Ok(self.inner.backbone_coordination_number(tolerance_mm))
     }
 
     /// Largest overlap depth [mm] between two particles or of a particle
