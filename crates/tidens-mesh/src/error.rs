@@ -10,6 +10,12 @@ pub const MAX_BLOCK_DIVISIONS: usize = 1024;
 /// Largest mesh level accepted by [`crate::divisions_for_level`].
 pub const MAX_LEVEL: u32 = 8;
 
+/// Largest deviation from a proper rotation accepted by
+/// [`crate::HexMesh::placed`]: of each entry of R^T R from the identity's,
+/// and of det R from 1. Any rotation computed in f64 passes; a matrix
+/// rounded to f32 does not.
+pub const ROTATION_TOLERANCE: f64 = 1e-10;
+
 /// A mesh parameter outside its allowed range. The message names the parameter,
 /// its value (with unit where it has one) and the allowed range.
 #[derive(thiserror::Error, Debug, Clone, PartialEq)]
@@ -95,6 +101,24 @@ pub enum MeshError {
         /// Largest relative volume error accepted.
         tolerance: f64,
     },
+    /// The rotation of a rigid placement ([`crate::HexMesh::placed`]) is not
+    /// a proper rotation: not orthonormal (a scaling, a shear, a non-finite
+    /// entry) or a reflection (det -1).
+    #[error(
+        "rotation = {rotation:?}: must be orthonormal with det +1 \
+         (largest |R^T R - I| entry {orthogonality}, det {det}; tolerance {ROTATION_TOLERANCE})"
+    )]
+    Rotation {
+        /// The rejected matrix, `rotation[row][col]`.
+        rotation: [[f64; 3]; 3],
+        /// Largest entry of |R^T R - I| (NaN for non-finite entries).
+        orthogonality: f64,
+        /// Determinant of the matrix.
+        det: f64,
+    },
+    /// The centre of a rigid placement ([`crate::HexMesh::placed`]).
+    #[error("centre = {0:?} mm: every coordinate must be finite")]
+    Centre([f64; 3]),
 }
 
 /// True when `v` is a usable length: finite and strictly positive.

@@ -1,10 +1,15 @@
 //! Meshes for tidens: one octant of a spheroidal powder particle (semi-axes
-//! a, a, c; c along z, the loading direction) centred at the origin, and plain
-//! boxes for verification tests. Lengths are in mm.
+//! a, a, c; c along z, the loading direction) centred at the origin, the
+//! whole particle, and plain boxes for verification tests. Lengths are in mm.
 //!
 //! - [`HexMesh`]: trilinear hexahedra ("cubed octant", [`hex`]).
 //!   [`HexMesh::spheroid_octant_exact_volume`] moves the curved-surface
 //!   nodes outward by O(h^2) so that the mesh has the octant's exact volume.
+//! - Whole particles, for random packings: [`HexMesh::spheroid_whole`] and
+//!   [`HexMesh::spheroid_whole_exact_volume`] glue the eight mirror images of
+//!   the octant into one conforming mesh whose boundary is the closed curved
+//!   surface; [`HexMesh::placed`] rotates it (its axis c along the rotation's
+//!   third column) and moves its centre anywhere.
 //! - [`TetMesh`]: quadratic 10-node tetrahedra ([`tet10`]) cut conformingly
 //!   from the hexahedra, with mid-edge nodes on the true curved surface.
 //!
@@ -27,6 +32,15 @@
 //! assert_eq!(tets.element_count(), 6 * mesh.element_count());
 //! assert!((tets.volume() - exact).abs() < 1e-5 * exact);
 //! assert!(tets.min_relative_det_bound() > 0.0);
+//!
+//! // The whole particle, with its axis c along (0, 1, 0), centred at
+//! // (1, 2, 3) mm: the exact volume 4/3 pi a^2 c, a closed curved boundary.
+//! let whole = HexMesh::spheroid_whole_exact_volume(&spec)?;
+//! assert_eq!(whole.element_count(), 8 * mesh.element_count());
+//! assert!(whole.boundary.iter().all(|f| f.kind == tidens_mesh::FaceKind::Curved));
+//! let quarter_turn_about_x = [[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]];
+//! let placed = whole.placed(quarter_turn_about_x, [1.0, 2.0, 3.0])?;
+//! assert!((placed.volume() - 8.0 * exact).abs() < 1e-12 * 8.0 * exact);
 //! # Ok::<(), tidens_mesh::MeshError>(())
 //! ```
 
@@ -42,9 +56,12 @@ pub mod tet10;
 mod tet_mesh;
 mod tet_quality;
 mod transform;
+mod whole;
 
 pub use cubed_octant::{OctantShape, radial_divisions};
-pub use error::{MAX_BLOCK_DIVISIONS, MAX_LEVEL, MAX_OCTANT_DIVISIONS, MeshError};
+pub use error::{
+    MAX_BLOCK_DIVISIONS, MAX_LEVEL, MAX_OCTANT_DIVISIONS, MeshError, ROTATION_TOLERANCE,
+};
 pub use exact_volume::EXACT_VOLUME_TOLERANCE;
 pub use tet_mesh::{TetBoundaryFace, TetMesh, project_to_spheroid};
 
@@ -188,6 +205,42 @@ impl HexMesh {
         shape: &OctantShape,
     ) -> Result<HexMesh, MeshError> {
         exact_volume::fit(octant(spec, shape)?, spec.a, spec.c)
+    }
+
+    /// Mesh of the whole spheroid {(x^2 + y^2)/a^2 + z^2/c^2 <= 1} \[mm\],
+    /// centred at the origin with its axis c along z: the eight mirror images
+    /// ([`HexMesh::mirrored`]) of [`HexMesh::spheroid_octant`] glued into one
+    /// conforming mesh along the planes x = 0, y = 0, z = 0.
+    ///
+    /// Nodes on those planes are shared by the images meeting there (created
+    /// once, from the octant's structure), so the mesh has
+    /// 8 N - 4 N1 - 6 N2 - 7 nodes for an octant of N nodes with N1 on exactly
+    /// one plane and N2 on exactly two (the centre is the last term), and
+    /// 8 times the octant's elements, all right-handed with the octant's
+    /// quality. Element `g * E + e` is element `e` of the octant (E elements)
+    /// mirrored about the axes `i` whose bit `1 << i` is set in `g`; the first
+    /// E elements and the first N nodes are the octant's. The boundary is the
+    /// closed curved surface only, every face `FaceKind::Curved` with its
+    /// normal outward; no `FaceKind::Plane` face remains. The volume falls
+    /// short of 4/3 pi a^2 c \[mm^3\] by the octant's relative error.
+    ///
+    /// Place it in a packing with [`HexMesh::placed`].
+    pub fn spheroid_whole(spec: &OctantSpec) -> Result<HexMesh, MeshError> {
+        Ok(whole::glued_mirror_images(&Self::spheroid_octant(spec)?))
+    }
+
+    /// Like [`HexMesh::spheroid_whole`], glued from
+    /// [`HexMesh::spheroid_octant_exact_volume`]: the mesh volume is the
+    /// spheroid's exact volume 4/3 pi a^2 c \[mm^3\] (to a relative
+    /// [`EXACT_VOLUME_TOLERANCE`]). The poles, the points on the diagonals
+    /// (+-1, +-1, +-1) and the face diagonals (before scaling by diag(a, a, c))
+    /// lie exactly on the spheroid.
+    ///
+    /// Errors as [`HexMesh::spheroid_octant_exact_volume`].
+    pub fn spheroid_whole_exact_volume(spec: &OctantSpec) -> Result<HexMesh, MeshError> {
+        Ok(whole::glued_mirror_images(
+            &Self::spheroid_octant_exact_volume(spec)?,
+        ))
     }
 
     /// Uniform mesh of the box [0, Lx] x [0, Ly] x [0, Lz] \[mm\] with

@@ -1,7 +1,10 @@
-//! Rigid transformations of a [`HexMesh`] and a [`TetMesh`]: reflections
-//! and translations.
+//! Rigid transformations of a [`HexMesh`] and a [`TetMesh`]: reflections,
+//! translations and (for a [`HexMesh`]) rotations.
 
-use crate::{BoundaryFace, FaceKind, HexMesh, TetBoundaryFace, TetMesh};
+use crate::hex::det3;
+use crate::{
+    BoundaryFace, FaceKind, HexMesh, MeshError, ROTATION_TOLERANCE, TetBoundaryFace, TetMesh,
+};
 
 /// Permutation that reverses a hexahedron's handedness while keeping VTK order:
 /// it swaps the roles of xi and eta (corner 1 <-> 3, 5 <-> 7).
@@ -40,11 +43,77 @@ impl HexMesh {
 
     /// The mesh shifted by `offset` \[mm\].
     pub fn translated(&self, offset: [f64; 3]) -> HexMesh {
+        self.with_nodes(translated_nodes(&self.nodes, offset))
+    }
+
+    /// The mesh rigidly placed: rotated about the origin by `rotation`, then
+    /// shifted by `centre` \[mm\], i.e. node `x -> R x + centre` with
+    /// `R[row][col] = rotation[row][col]`. The columns of `R` are the images
+    /// of the mesh axes: a particle meshed by [`HexMesh::spheroid_whole`]
+    /// (centred at the origin, semi-axis c along z) ends up centred at
+    /// `centre` with its semi-axis c along the third column
+    /// `(R[0][2], R[1][2], R[2][2])`.
+    ///
+    /// Element node order, boundary faces and their kinds are unchanged; a
+    /// proper rotation keeps every element right-handed and every boundary
+    /// normal outward. A `FaceKind::Plane` label keeps its axis, which after
+    /// a general rotation no longer is the face's normal: place closed meshes
+    /// (all faces `FaceKind::Curved`).
+    ///
+    /// Errors: [`MeshError::Rotation`] unless `rotation` is orthonormal with
+    /// determinant +1 to [`ROTATION_TOLERANCE`] (a reflection, a scaling or a
+    /// non-finite entry), [`MeshError::Centre`] unless `centre` is finite.
+    pub fn placed(&self, rotation: [[f64; 3]; 3], centre: [f64; 3]) -> Result<HexMesh, MeshError> {
+        check_rotation(rotation)?;
+        if !centre.iter().all(|v| v.is_finite()) {
+            return Err(MeshError::Centre(centre));
+        }
+        let nodes = self
+            .nodes
+            .iter()
+            .map(|p| {
+                std::array::from_fn(|r| {
+                    let row = rotation[r];
+                    row[0] * p[0] + row[1] * p[1] + row[2] * p[2] + centre[r]
+                })
+            })
+            .collect();
+        Ok(self.with_nodes(nodes))
+    }
+
+    /// The mesh with new node coordinates, same elements and boundary.
+    fn with_nodes(&self, nodes: Vec<[f64; 3]>) -> HexMesh {
         HexMesh {
-            nodes: translated_nodes(&self.nodes, offset),
+            nodes,
             elements: self.elements.clone(),
             boundary: self.boundary.clone(),
         }
+    }
+}
+
+/// Checks that `r` is a proper rotation to [`ROTATION_TOLERANCE`].
+fn check_rotation(r: [[f64; 3]; 3]) -> Result<(), MeshError> {
+    let mut orthogonality: f64 = 0.0;
+    for i in 0..3 {
+        for j in 0..3 {
+            let dot = r[0][i] * r[0][j] + r[1][i] * r[1][j] + r[2][i] * r[2][j];
+            let identity = if i == j { 1.0 } else { 0.0 };
+            let dev = (dot - identity).abs();
+            // Unlike `f64::max`, keeps a NaN (non-finite entries) once seen.
+            if dev.is_nan() || dev > orthogonality {
+                orthogonality = dev;
+            }
+        }
+    }
+    let det = det3(&r);
+    if orthogonality <= ROTATION_TOLERANCE && (det - 1.0).abs() <= ROTATION_TOLERANCE {
+        Ok(())
+    } else {
+        Err(MeshError::Rotation {
+            rotation: r,
+            orthogonality,
+            det,
+        })
     }
 }
 
