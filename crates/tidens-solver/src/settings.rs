@@ -76,7 +76,8 @@ pub enum HexFacets {
     /// patches of the slender tips of the sc2 cell's particles of c/a = 5
     /// warp as they deform until they part from their triangles, and that
     /// case failed at mesh levels 2 and 3 (rho = 0.865 and 0.817); on the
-    /// triangles it reaches 0.9, with the density monotone.
+    /// triangles it reaches 0.9 at level 2, with the density monotone (at
+    /// level 3 it stalls at 0.835).
     #[default]
     Triangles,
     /// Each boundary quad's bilinear patch, the face of its element
