@@ -127,6 +127,7 @@ def test_densities_beyond_jamming_are_refused_with_the_density_reached() -> None
         ({"size_ratio": 2.0, "sigma": 0.1}, ValueError, r"size_ratio and sigma are both given"),
         ({"boundary": "box"}, ValueError, r"boundary = 'box': must be one of periodic, die"),
         ({"rho0": "0.6"}, TypeError, r"rho0"),
+        ({"seed": -1}, ValueError, r"seed = -1: must be an integer >= 0"),
     ],
 )
 def test_bad_packing_arguments_name_themselves(kw: dict[str, object], kind: type[Exception], message: str) -> None:

@@ -4,7 +4,7 @@
 
 use crate::errors::{Number, parameter_error};
 use crate::simulation::named;
-use numpy::{PyArray2, ToPyArray};
+use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use tidens_packing::{Boundary, Packing, PackingError, PackingSpec, SizeDistribution};
@@ -60,8 +60,9 @@ fn spec(
     sizes: (Option<f64>, f64, Option<f64>),
     boundary: &str,
     box_aspect: (f64, f64, f64),
-    seed: u64,
+    seed: i64,
 ) -> PyResult<PackingSpec> {
+    let seed = u64::try_from(seed).map_err(|_| parameter_error("seed", seed, "an integer >= 0"))?;
     let count = usize::try_from(particles)
         .map_err(|_| parameter_error("particles", particles, "in [1, 10000]"))?;
     let distribution = match sizes {
@@ -159,7 +160,7 @@ impl PyPacking {
         sigma: Option<f64>,
         boundary: &str,
         box_aspect: (f64, f64, f64),
-        seed: u64,
+        seed: i64,
         jam: bool,
     ) -> PyResult<Self> {
         let spec = spec(
@@ -217,34 +218,23 @@ impl PyPacking {
 
     /// Particle centres [mm], shape (N, 3).
     #[getter]
-    fn centres_mm<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let rows: Vec<f64> = self.inner.particles.iter().flat_map(|p| p.centre).collect();
-        numpy::ndarray::Array2::from_shape_vec((self.inner.particles.len(), 3), rows)
-            .expect("three coordinates a particle")
-            .to_pyarray(py)
+    fn centres_mm<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let p = &self.inner.particles;
+        table(py, 3, p.iter().flat_map(|p| p.centre).collect())
     }
 
     /// Semi-axes (a, c) [mm], shape (N, 2): a across the axis, c along it.
     #[getter]
-    fn semi_axes_mm<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let rows: Vec<f64> = self
-            .inner
-            .particles
-            .iter()
-            .flat_map(|p| [p.a, p.c])
-            .collect();
-        numpy::ndarray::Array2::from_shape_vec((self.inner.particles.len(), 2), rows)
-            .expect("two semi-axes a particle")
-            .to_pyarray(py)
+    fn semi_axes_mm<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let p = &self.inner.particles;
+        table(py, 2, p.iter().flat_map(|p| [p.a, p.c]).collect())
     }
 
     /// Unit axes of the particles (the direction of c), shape (N, 3).
     #[getter]
-    fn axes<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
-        let rows: Vec<f64> = self.inner.particles.iter().flat_map(|p| p.axis).collect();
-        numpy::ndarray::Array2::from_shape_vec((self.inner.particles.len(), 3), rows)
-            .expect("three components an axis")
-            .to_pyarray(py)
+    fn axes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        let p = &self.inner.particles;
+        table(py, 3, p.iter().flat_map(|p| p.axis).collect())
     }
 
     /// Particle-particle contacts: (i, j, image, gap_mm) for every pair
@@ -297,6 +287,13 @@ impl PyPacking {
             self.inner.rel_density()
         )
     }
+}
+
+/// `values`, one particle's `columns` after another, as an (N, columns)
+/// numpy array.
+fn table(py: Python<'_>, columns: usize, values: Vec<f64>) -> PyResult<Bound<'_, PyArray2<f64>>> {
+    let rows = values.len() / columns;
+    PyArray1::from_vec(py, values).reshape([rows, columns])
 }
 
 fn check_tolerance(tolerance_mm: f64) -> PyResult<()> {
