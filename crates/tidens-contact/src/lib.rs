@@ -5,9 +5,11 @@
 //!
 //! - detection with parry (`parry3d-f64`): each surface is triangulated in its
 //!   current configuration and the nodes of one surface are projected onto the
-//!   other's `TriMesh`, only for pairs of surfaces whose bounding boxes meet;
-//!   the triangle found names the quad facet the node is paired with, one on
-//!   each other surface within the search distance (a node in the pocket
+//!   other's `TriMesh` (oriented: its pseudo-normals give the side of the
+//!   surface the node is on), only for pairs of surfaces whose bounding
+//!   boxes meet; the triangle found names the facet around which the node
+//!   is paired, with the facet whose reading agrees with the node's signed
+//!   distance, one on each other surface within the search distance (a node in the pocket
 //!   where two particles meet is held off both), each pair with its own
 //!   multiplier;
 //! - enforcement node to surface, both ways (two-pass, each pass carrying half
@@ -72,10 +74,11 @@ const KEEP_FACET_MARGIN: f64 = 1.1;
 /// [`ParticleContact::nearest`]).
 const MAKE_FACET_MARGIN: f64 = 1.05;
 
-/// A node is paired only with a facet whose patch measures it at most this
-/// fraction of the search distance farther off than the nearest point of
-/// the surface (see [`ParticleContact::pair`]); the bilinear patches of a
-/// curved surface's quads stand off their triangles by a few hundredths.
+/// A node is paired only with a facet whose penetration reading differs
+/// by at most this fraction of the search distance from the node's signed
+/// depth below the surface (see [`ParticleContact::nearest`]); the bilinear
+/// patches of a curved surface's quads stand off their triangles by a few
+/// hundredths.
 const NEAR_FACET_SLACK: f64 = 0.1;
 
 /// Dofs of one contact term: a slave node and the four nodes of a facet.
@@ -302,7 +305,8 @@ impl ParticleContact {
     }
 
     /// Ordered pairs (slave, master) of surfaces whose bounding boxes,
-    /// grown by the search distance, overlap in the configuration `x`.
+    /// grown by the search distance, overlap in the configuration `x`; a
+    /// periodic image ([`ContactSurface::master_only`]) is never the slave.
     pub fn candidate_pairs(&self, x: &[f64]) -> Vec<(usize, usize)> {
         let boxes: Vec<([f64; 3], [f64; 3])> =
             self.surfaces.iter().map(|s| s.bounding_box(x)).collect();
@@ -311,7 +315,8 @@ impl ParticleContact {
         for i in 0..boxes.len() {
             for j in 0..boxes.len() {
                 let (a, b) = (&boxes[i], &boxes[j]);
-                if i != j && (0..3).all(|k| a.0[k] - d <= b.1[k] && b.0[k] - d <= a.1[k]) {
+                let slave = !self.surfaces[i].master_only;
+                if slave && i != j && (0..3).all(|k| a.0[k] - d <= b.1[k] && b.0[k] - d <= a.1[k]) {
                     pairs.push((i, j));
                 }
             }
@@ -348,13 +353,25 @@ impl ParticleContact {
     /// on an edge between two facets is not left to the order of a tree
     /// traversal.
     ///
-    /// Only the quads that measure the node about as far off as the
-    /// nearest point of the surface is (within [`NEAR_FACET_SLACK`] of the
-    /// search distance) are candidates: near the tip of a slender spheroid
-    /// the quads around the pole also take in the far side, onto which the
-    /// node projects well inside, and read as deep as the tip is thick
-    /// (measured on the sc2 cell of c/a = 5 at level 2: paired afresh, a
-    /// node in contact read 1.6e-2 mm deep on the far side's quad).
+    /// Only the facets whose penetration reading agrees with the node's
+    /// signed depth below the surface (within [`NEAR_FACET_SLACK`] of the
+    /// search distance) are candidates. The depth is parry's distance to
+    /// the nearest point, positive where the pseudo-normal there (of the
+    /// face, edge or corner it lies on) says the node is inside. Near the
+    /// tip of a slender spheroid the facets around the pole also take in
+    /// the far side, onto which the node projects well inside, and read as
+    /// deep as the tip is thick (measured on the sc2 cell of c/a = 5 at
+    /// level 2: paired afresh, a node in contact read 1.6e-2 mm deep on the
+    /// far side's quad). And beside a fold of a tip's facets a node outside
+    /// can lie behind one facet's plane, just past that facet's edge: on
+    /// the same cell at level 3, on triangles, a node 4.8e-3 mm outside a
+    /// tip read 4.8e-3 mm deep on such a facet, 0.015 of it past its edge.
+    /// A filter on the distance alone let it through (the reading was as
+    /// large as the distance, with the wrong sign); paired at each step's
+    /// start, the node was pushed out at 3e5 MPa, and the run stalled at
+    /// rho = 0.835 with steps of 1e-7 s. A bilinear quad that parry found
+    /// is a candidate whatever it reads: its patch may stand off the
+    /// triangles parry searched.
     ///
     /// None if even the chosen quad's projection lies beyond its edges (by
     /// more than [`MAKE_FACET_MARGIN`]): the node then faces a ridge or
@@ -389,8 +406,11 @@ impl ParticleContact {
             self.settings.search_distance,
         )?;
         let master = &self.surfaces[m];
+        // The node's signed depth below the surface, from parry's nearest
+        // point and the side its pseudo-normal gives.
         let distance = (proj.point - q).length();
-        let near = distance + NEAR_FACET_SLACK * self.settings.search_distance;
+        let depth = if proj.is_inside { distance } else { -distance };
+        let slack = NEAR_FACET_SLACK * self.settings.search_distance;
         let found = master.facet_of_triangle(tri as usize);
         let best = master
             .ring(found)
@@ -398,8 +418,11 @@ impl ParticleContact {
             .filter_map(|&f| {
                 let xf = master.facets[f].map(|n| point(x, n));
                 let xi = facet::project_on(master.kind, &p, &xf);
-                let far = facet::penetration_on(master.kind, &p, &xf, xi).abs() > near;
-                (f == found || !far).then(|| (f, xi, facet::outside(master.kind, xi)))
+                let far = (facet::penetration_on(master.kind, &p, &xf, xi) - depth).abs() > slack;
+                // A quad's patch may stand off the triangles parry searched:
+                // the quad parry found is taken whatever it reads.
+                let found_quad = f == found && master.kind == FacetKind::Quad;
+                (found_quad || !far).then(|| (f, xi, facet::outside(master.kind, xi)))
             })
             .min_by(|a, b| a.2.total_cmp(&b.2).then(a.0.cmp(&b.0)))?;
         (best.2 <= MAKE_FACET_MARGIN).then_some((best.0, best.1))

@@ -4,7 +4,7 @@
 
 use crate::error::ContactError;
 use parry3d_f64::math::Vector as PVector;
-use parry3d_f64::shape::TriMesh;
+use parry3d_f64::shape::{TriMesh, TriMeshFlags};
 use serde::{Deserialize, Serialize};
 
 /// The shape of a surface's facets.
@@ -36,6 +36,10 @@ pub struct ContactSurface {
     triangles: Vec<[u32; 3]>,
     /// The facets around each facet (sharing a node with it, itself included).
     ring: Vec<Vec<usize>>,
+    /// A periodic image of another particle's surface (see
+    /// [`ContactSurface::image`]): a master only, its nodes never slaves.
+    #[serde(default)]
+    pub master_only: bool,
 }
 
 impl ContactSurface {
@@ -167,6 +171,38 @@ impl ContactSurface {
             kind,
             triangles,
             ring,
+            master_only: false,
+        })
+    }
+
+    /// The surface's periodic image: the same facets on the image nodes
+    /// `renumber(n)` of its nodes `n` (copies translated by a period of the
+    /// cell, whose displacements are the originals'), a master only.
+    ///
+    /// Contact between a particle and an image of another is the contact
+    /// of the two across the cell's boundary. Its two passes are each
+    /// particle's nodes on the other's image: the image's nodes are never
+    /// slaves, so that every image of a particle that another can touch must
+    /// be there (the images by both `t` and `-t` for a period `t`) for each
+    /// contact to have both passes once.
+    ///
+    /// `renumber` must be increasing (image nodes in the order of their
+    /// originals), so that the search triangles and facet rings carry over.
+    pub fn image(&self, renumber: impl Fn(usize) -> usize) -> Result<Self, ContactError> {
+        let nodes: Vec<usize> = self.nodes.iter().map(|&n| renumber(n)).collect();
+        if nodes.windows(2).any(|w| w[0] >= w[1]) {
+            return Err(ContactError::Surface(
+                "the image's node numbering must increase with the original's".into(),
+            ));
+        }
+        Ok(Self {
+            nodes,
+            areas: self.areas.clone(),
+            facets: self.facets.iter().map(|f| f.map(&renumber)).collect(),
+            kind: self.kind,
+            triangles: self.triangles.clone(),
+            ring: self.ring.clone(),
+            master_only: true,
         })
     }
 
@@ -197,14 +233,17 @@ impl ContactSurface {
     }
 
     /// The surface as a parry `TriMesh` in the configuration `x`; triangle
-    /// `t` lies on facet [`Self::facet_of_triangle`]`(t)`.
+    /// `t` lies on facet [`Self::facet_of_triangle`]`(t)`. The mesh is
+    /// oriented (outward normals), so parry keeps the pseudo-normals of its
+    /// edges and vertices and tells on which side of the surface a point
+    /// lies, also where its nearest point is on an edge or a corner.
     pub fn trimesh(&self, x: &[f64]) -> Option<TriMesh> {
         let vertices = self
             .nodes
             .iter()
             .map(|&n| PVector::new(x[3 * n], x[3 * n + 1], x[3 * n + 2]))
             .collect();
-        TriMesh::new(vertices, self.triangles.clone()).ok()
+        TriMesh::with_flags(vertices, self.triangles.clone(), TriMeshFlags::ORIENTED).ok()
     }
 }
 

@@ -46,6 +46,10 @@ pub struct Assembler {
     piston_diagonal: usize,
     /// Times the pattern grew for new particle-contact couplings.
     pattern_rebuilds: usize,
+    /// For each dof, how many times the piston's displacement adds to it
+    /// (z dofs of periodic images above or below the cell; see
+    /// [`Constraints::piston_coupling`]); empty when none does.
+    piston_coupling: Vec<f64>,
 }
 
 impl Assembler {
@@ -56,7 +60,15 @@ impl Assembler {
             .collect();
         let elements = ElementAssembler::new(body.dof_count(), 3 * body.kind().nodes(), &dofs);
         let element_cliques = constraints.element_cliques(body);
+        let piston_coupling = if constraints.has_piston_coupling() {
+            (0..body.dof_count())
+                .map(|d| constraints.piston_coupling(d))
+                .collect()
+        } else {
+            Vec::new()
+        };
         let mut a = Self {
+            piston_coupling,
             dof_values: vec![0.0; elements.nnz()],
             elements,
             element_cliques,
@@ -146,8 +158,29 @@ impl Assembler {
                 }
             }
         }
+        let coupled = |t: &tidens_contact::ContactTerm| {
+            !self.piston_coupling.is_empty()
+                && t.dofs.iter().any(|&d| self.piston_coupling[d] != 0.0)
+        };
+        // The piston as one more dof after the body's, on its equation.
+        let map_with_piston: Vec<usize> = if eval.contact.terms.iter().any(coupled) {
+            map.iter().copied().chain([n]).collect()
+        } else {
+            Vec::new()
+        };
         for t in &eval.contact.terms {
-            outside += self.system.add_block(&t.dofs, &t.tangent, map);
+            outside += if coupled(t) {
+                let (dofs, tangent) =
+                    with_piston(&t.dofs, &t.tangent, |d| self.piston_coupling[d], n);
+                self.system.add_block(&dofs, &tangent, &map_with_piston)
+            } else {
+                self.system.add_block(&t.dofs, &t.tangent, map)
+            };
+        }
+        for (d, &k) in eval.drag_diagonal.iter().enumerate() {
+            if k != 0.0 && map[d] == d {
+                self.system.add(d, d, k);
+            }
         }
         for (d, &m) in map.iter().enumerate() {
             if m != d {
@@ -215,5 +248,90 @@ impl Assembler {
             }
         }
         out
+    }
+}
+
+/// A contact term's dofs and tangent with the piston's displacement as
+/// one more dof (numbered `n`, after the body's): the term's dofs `u`
+/// depend on the body's and the piston's as `u = u_body + c U` (`c` the
+/// coupling of each dof), so its tangent `K` becomes `T^T K T` with
+/// `T = [I | c]`.
+fn with_piston(
+    dofs: &[usize],
+    tangent: &[f64],
+    coupling: impl Fn(usize) -> f64,
+    n: usize,
+) -> (Vec<usize>, Vec<f64>) {
+    let m = dofs.len();
+    let c: Vec<f64> = dofs.iter().map(|&d| coupling(d)).collect();
+    let k = |p: usize, q: usize| tangent[p * m + q];
+    let mut out = vec![0.0; (m + 1) * (m + 1)];
+    let mut corner = 0.0;
+    for p in 0..m {
+        let (mut row, mut col) = (0.0, 0.0);
+        for q in 0..m {
+            out[p * (m + 1) + q] = k(p, q);
+            row += k(p, q) * c[q];
+            col += c[q] * k(q, p);
+        }
+        out[p * (m + 1) + m] = row;
+        out[m * (m + 1) + p] = col;
+        corner += c[p] * row;
+    }
+    out[m * (m + 1) + m] = corner;
+    let dofs = dofs.iter().copied().chain([n]).collect();
+    (dofs, out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_term_on_periodic_images_is_the_term_on_their_originals_and_the_piston() {
+        // Three dofs, the last an image's z one period above (coupling 1),
+        // the second one period below (-1): for any body motion v and
+        // piston motion w, the extended tangent's quadratic form equals
+        // the term's at the dofs' motion v + c w.
+        let dofs = [4, 7, 11];
+        let k = [4.0, -1.0, 0.5, -1.0, 3.0, 0.25, 0.5, 0.25, 2.0];
+        let coupling = |d: usize| match d {
+            7 => -1.0,
+            11 => 1.0,
+            _ => 0.0,
+        };
+        let (ext, k16) = with_piston(&dofs, &k, coupling, 20);
+        assert_eq!(ext, vec![4, 7, 11, 20]);
+        for (v, w) in [
+            ([1.0, 0.0, 0.0], 0.0),
+            ([0.3, -0.7, 0.2], 0.0),
+            ([0.3, -0.7, 0.2], 1.3),
+            ([0.0; 3], 1.0),
+        ] {
+            let u: Vec<f64> = dofs
+                .iter()
+                .zip(&v)
+                .map(|(&d, x)| x + coupling(d) * w)
+                .collect();
+            let direct: f64 = (0..3)
+                .flat_map(|p| (0..3).map(move |q| (p, q)))
+                .map(|(p, q)| u[p] * k[3 * p + q] * u[q])
+                .sum();
+            let x = [v[0], v[1], v[2], w];
+            let extended: f64 = (0..4)
+                .flat_map(|p| (0..4).map(move |q| (p, q)))
+                .map(|(p, q)| x[p] * k16[4 * p + q] * x[q])
+                .sum();
+            assert!(
+                (direct - extended).abs() < 1e-14,
+                "{v:?} {w}: {direct} against {extended}"
+            );
+        }
+        // Symmetric, as the term's.
+        for p in 0..4 {
+            for q in 0..4 {
+                assert_eq!(k16[4 * p + q], k16[4 * q + p]);
+            }
+        }
     }
 }

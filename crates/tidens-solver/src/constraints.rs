@@ -28,6 +28,15 @@ enum Rule {
         low: bool,
         high: bool,
     },
+    /// A dof of a periodic image node: the original dof's displacement,
+    /// plus `periods` times the piston's along z (the image lies `periods`
+    /// cell heights Lz + U away).
+    Image {
+        original: usize,
+        periods: i8,
+    },
+    /// Held at zero (a periodic cell's rigid translation).
+    Pinned,
 }
 
 /// The rigid planes of a scene and the contact state of every dof.
@@ -149,6 +158,24 @@ impl Constraints {
         Ok(c)
     }
 
+    /// The constraints of a periodic cell of `nodes` nodes and lengths
+    /// `lengths` \[mm\] (reference coordinates `coordinates`): no rigid
+    /// plane, every dof free until made an image ([`Constraints::set_images`])
+    /// or pinned ([`Constraints::pin`]).
+    pub fn without_planes(coordinates: &[[f64; 3]], lengths: [f64; 3]) -> Self {
+        let n_dof = 3 * coordinates.len();
+        Self {
+            lengths,
+            x0: coordinates.iter().flatten().copied().collect(),
+            rules: vec![Rule::Free; n_dof],
+            contact: vec![None; n_dof],
+            tied_planes: false,
+            ties: vec![None; n_dof],
+            flips: vec![0; n_dof],
+            unilateral: Vec::new(),
+        }
+    }
+
     /// Number of body dofs; the piston's equation is numbered after them.
     pub fn dof_count(&self) -> usize {
         self.rules.len()
@@ -173,21 +200,110 @@ impl Constraints {
         match self.rules[d] {
             Rule::Bilateral { high } => Some(high),
             Rule::Unilateral { .. } => self.contact[d],
-            Rule::Free => None,
+            Rule::Free | Rule::Image { .. } | Rule::Pinned => None,
         }
     }
 
     /// Equation of each body dof: its own, the piston's (dofs held on the
-    /// piston plane) or [`DOF_DROPPED`] (dofs held on a fixed plane).
+    /// piston plane), the original's (dofs of periodic images) or
+    /// [`DOF_DROPPED`] (dofs held on a fixed plane, or pinned).
     pub fn equation_map(&self) -> Vec<usize> {
         (0..self.rules.len())
-            .map(|d| match self.held_on(d) {
-                None if self.ties[d].is_some() => DOF_DROPPED,
-                None => d,
-                Some(true) if d % 3 == 2 => self.piston_equation(),
-                Some(_) => DOF_DROPPED,
+            .map(|d| match self.rules[d] {
+                Rule::Image { original, .. } => self.own_equation(original),
+                _ => self.own_equation(d),
             })
             .collect()
+    }
+
+    /// The equation of dof `d` that is not an image.
+    fn own_equation(&self, d: usize) -> usize {
+        if self.rules[d] == Rule::Pinned {
+            return DOF_DROPPED;
+        }
+        match self.held_on(d) {
+            None if self.ties[d].is_some() => DOF_DROPPED,
+            None => d,
+            Some(true) if d % 3 == 2 => self.piston_equation(),
+            Some(_) => DOF_DROPPED,
+        }
+    }
+
+    /// How many times the piston's displacement dof `d` adds to its
+    /// original's (a z dof of a periodic image `periods` cells above, or
+    /// below when negative); zero for every other dof. The image's force
+    /// acts on its original and, that many times, on the piston.
+    pub fn piston_coupling(&self, d: usize) -> f64 {
+        match self.rules[d] {
+            Rule::Image { periods, .. } => f64::from(periods),
+            _ => 0.0,
+        }
+    }
+
+    /// True when some dof is a periodic image whose z displacement follows
+    /// the piston (the cell is periodic along z).
+    pub fn has_piston_coupling(&self) -> bool {
+        self.rules
+            .iter()
+            .any(|r| matches!(r, Rule::Image { periods, .. } if *periods != 0))
+    }
+
+    /// Makes nodes periodic images: `(image, original, periods)` says node
+    /// `image` is node `original` moved by `periods` = (a, b, c) periods of
+    /// the cell (a Lx, b Ly, c (Lz + U)). An image's displacement is its
+    /// original's, plus c U along z: it has no equation of its own. Image
+    /// nodes must be free (on no plane) and originals must not be images.
+    pub fn set_images(&mut self, images: &[(usize, usize, [i8; 3])]) -> Result<(), SolverError> {
+        let nodes = self.rules.len() / 3;
+        for &(image, original, periods) in images {
+            if image >= nodes || original >= nodes || image == original {
+                return Err(SolverError::Unsupported(format!(
+                    "periodic image node {image} of node {original}: not two nodes of the mesh ({nodes})"
+                )));
+            }
+            for axis in 0..3 {
+                let (di, d) = (3 * image + axis, 3 * original + axis);
+                if self.rules[di] != Rule::Free || matches!(self.rules[d], Rule::Image { .. }) {
+                    return Err(SolverError::Unsupported(format!(
+                        "periodic image node {image} of node {original}: an image must be free and its original no image"
+                    )));
+                }
+                let periods = if axis == 2 { periods[2] } else { 0 };
+                self.rules[di] = Rule::Image {
+                    original: d,
+                    periods,
+                };
+            }
+        }
+        // An original set after its image was made one.
+        for d in 0..self.rules.len() {
+            if let Rule::Image { original, .. } = self.rules[d]
+                && matches!(self.rules[original], Rule::Image { .. })
+            {
+                return Err(SolverError::Unsupported(format!(
+                    "periodic image node {}: its original {} is an image",
+                    d / 3,
+                    original / 3
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Holds the free dofs `dofs` at zero displacement (the rigid
+    /// translation of a periodic cell, which nothing else fixes).
+    pub fn pin(&mut self, dofs: &[usize]) -> Result<(), SolverError> {
+        for &d in dofs {
+            if self.rules.get(d) != Some(&Rule::Free) {
+                return Err(SolverError::Unsupported(format!(
+                    "dof {d} cannot be pinned: it is not a free dof of the mesh"
+                )));
+            }
+        }
+        for &d in dofs {
+            self.rules[d] = Rule::Pinned;
+        }
+        Ok(())
     }
 
     /// Could dof `d` ever be held on the piston plane?
@@ -212,20 +328,38 @@ impl Constraints {
     /// The equations a coupling of body dofs `dofs` may touch in any contact
     /// state: their own, and the piston's if any of them may follow it.
     pub fn clique(&self, dofs: &[usize]) -> Vec<usize> {
-        let mut eqs = dofs.to_vec();
-        if dofs.iter().any(|&d| self.may_follow_piston(d)) {
+        // An image couples through its original (and the piston, along z).
+        let own = |d: usize| match self.rules[d] {
+            Rule::Image { original, .. } => original,
+            _ => d,
+        };
+        let mut eqs: Vec<usize> = dofs.iter().map(|&d| own(d)).collect();
+        if dofs
+            .iter()
+            .any(|&d| self.may_follow_piston(own(d)) || self.piston_coupling(d) != 0.0)
+        {
             eqs.push(self.piston_equation());
         }
+        eqs.sort_unstable();
+        eqs.dedup();
         eqs
     }
 
-    /// Puts every held dof on its plane.
+    /// Puts every held dof on its plane, pinned dofs at zero and images
+    /// where their originals (and the cell's height) put them.
     pub fn enforce(&self, u: &mut [f64], piston: f64) {
         for d in 0..self.rules.len() {
-            if let Some(high) = self.held_on(d) {
+            if self.rules[d] == Rule::Pinned {
+                u[d] = 0.0;
+            } else if let Some(high) = self.held_on(d) {
                 u[d] = self.plane_position(d % 3, high, piston) - self.x0[d];
             } else if let Some(value) = self.ties[d] {
                 u[d] = value;
+            }
+        }
+        for d in 0..self.rules.len() {
+            if let Rule::Image { original, periods } = self.rules[d] {
+                u[d] = u[original] + f64::from(periods) * piston;
             }
         }
     }
@@ -389,6 +523,83 @@ impl Constraints {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn periodic_images_follow_their_originals_and_the_cell_height() {
+        // Node 0 free, node 1 on the piston, nodes 2 and 3 their images one
+        // period along x and one cell height up and down; node 4 pinned.
+        let nodes = [
+            [0.5, 0.5, 0.5],
+            [0.5, 0.5, 1.0],
+            [1.5, 0.5, 1.5],
+            [0.5, 1.5, 0.0],
+            [0.2, 0.2, 0.2],
+        ];
+        let faces: [(&[usize], FaceKind); 1] = [(
+            &[1],
+            FaceKind::Plane {
+                axis: 2,
+                high: true,
+            },
+        )];
+        let mut c = Constraints::new(&nodes, faces, [1.0; 3], true, false).unwrap();
+        c.set_images(&[(2, 0, [1, 0, 1]), (3, 1, [0, 1, -1])])
+            .unwrap();
+        c.pin(&[12, 13, 14]).unwrap();
+        let map = c.equation_map();
+        let piston = c.piston_equation();
+        assert_eq!(&map[0..3], &[0, 1, 2]);
+        assert_eq!(&map[6..9], &[0, 1, 2]);
+        assert_eq!(
+            map[11], piston,
+            "the image of a node on the piston follows it"
+        );
+        assert_eq!(&map[12..15], &[DOF_DROPPED; 3]);
+        assert_eq!(c.piston_coupling(8), 1.0);
+        assert_eq!(c.piston_coupling(11), -1.0);
+        assert_eq!(c.piston_coupling(6), 0.0);
+        assert!(c.has_piston_coupling());
+        let mut u: Vec<f64> = (0..15).map(|d| 0.01 * d as f64).collect();
+        c.enforce(&mut u, -0.1);
+        assert_eq!(&u[6..8], &[u[0], u[1]]);
+        assert!((u[8] - (u[2] - 0.1)).abs() < 1e-15);
+        // Node 1 on the piston plane (Lz + U = 0.9): its image 0.9 below.
+        assert!((u[5] + 0.1).abs() < 1e-15);
+        assert!((u[11] - (u[5] + 0.1)).abs() < 1e-15);
+        assert_eq!(&u[12..15], &[0.0; 3]);
+        // An image couples through its original, and along z the piston.
+        assert_eq!(c.clique(&[6, 7]), vec![0, 1]);
+        assert_eq!(c.clique(&[8, 3]), vec![2, 3, piston]);
+    }
+
+    #[test]
+    fn an_image_must_be_free_and_its_original_no_image() {
+        let nodes = [[0.5; 3], [0.5, 0.5, 1.0], [1.5, 0.5, 0.5], [2.5, 0.5, 0.5]];
+        let faces: [(&[usize], FaceKind); 1] = [(
+            &[1],
+            FaceKind::Plane {
+                axis: 2,
+                high: true,
+            },
+        )];
+        let fresh = || Constraints::new(&nodes, faces, [1.0; 3], true, false).unwrap();
+        assert!(
+            fresh().set_images(&[(1, 0, [0, 0, 1])]).is_err(),
+            "image on a plane"
+        );
+        assert!(
+            fresh()
+                .set_images(&[(2, 0, [1, 0, 0]), (3, 2, [1, 0, 0])])
+                .is_err()
+        );
+        assert!(
+            fresh()
+                .set_images(&[(3, 2, [1, 0, 0]), (2, 0, [1, 0, 0])])
+                .is_err()
+        );
+        assert!(fresh().set_images(&[(2, 9, [1, 0, 0])]).is_err());
+        assert!(fresh().pin(&[5]).is_err(), "a dof on the piston");
+    }
 
     /// One curved-surface node touching the piston (z = Lz) of a unit box,
     /// and one free curved node inside it: their z dofs are unilateral.

@@ -11,9 +11,52 @@ use tidens_fem::{BodyEvaluation, FemError};
 pub struct Evaluation {
     pub body: BodyEvaluation,
     pub contact: ContactEvaluation,
-    /// Internal force of the body plus the contact forces \[N\].
+    /// Internal force of the body plus the contact forces \[N\] (and, in a
+    /// periodic cell, the stabilising drag).
     pub f_int: Vec<f64>,
+    /// The drag's stiffness on each dof's diagonal \[N/mm\] (empty without
+    /// stabilisation; see [`Stabilisation`]).
+    pub drag_diagonal: Vec<f64>,
+    /// Sum of the magnitudes of the drag forces \[N\].
+    pub drag_force: f64,
 }
+
+/// A weak drag on every particle node against its motion, over a step,
+/// relative to the cell's affine (uniaxial) motion, for periodic cells.
+///
+/// Nothing else holds a particle's rigid motions there: a sphere pressed
+/// by frictionless contacts can turn about its centre at no cost, and a
+/// particle that touches none (a rattler) can move freely. Over a step the
+/// drag on a node of volume share `V_i` is `k V_i (u_i - u_ref,i)`, with
+/// `u_ref` the node's displacement at the step's start plus the affine
+/// motion the step's predictor expects (the piston's displacement
+/// extrapolated, so that the drag couples no dof to the piston), and
+/// `k = beta f sigma / (R^2 de)`: `f sigma` the stress the cell feels at
+/// the step's end, `R` the largest particle radius, `de` the strain
+/// increment the predictor expects (at least the load increment's elastic
+/// strain). A particle moving off the affine motion by `de R` over the
+/// step, as rearranging particles do, then feels about `4 beta` of the load
+/// it carries, whatever the creep rate. [`crate::RunStats`] reports the
+/// largest drag, summed over the nodes, against the piston force.
+#[derive(Clone, Debug)]
+pub(crate) struct Stabilisation {
+    /// Volume share of each dof's node \[mm^3\] (zero on image and pinned
+    /// dofs).
+    pub volume: Vec<f64>,
+    /// Reference coordinate of each dof along z over the cell's height \[-\]
+    /// (the affine motion's weight).
+    pub height_fraction: Vec<f64>,
+    /// `beta / R^2` \[1/mm^2\].
+    pub scale: f64,
+    /// `k` of the current step \[MPa/mm^2 = N/mm^4\].
+    pub stiffness: f64,
+    /// The displacement the drag is measured from in the current step: the
+    /// start's plus the predictor's affine motion \[mm\].
+    pub reference: Vec<f64>,
+}
+
+/// The drag's share `beta` of the load (see [`Stabilisation`]).
+pub(crate) const STABILISATION: f64 = 1e-3;
 
 impl Evaluation {
     /// True when the element and contact tangents were computed.
@@ -63,10 +106,23 @@ impl Simulation {
             None => ContactEvaluation::default(),
         };
         self.stats.contact_seconds += t1.elapsed().as_secs_f64();
+        let (mut drag_diagonal, mut drag_force) = (Vec::new(), 0.0);
+        if let Some(st) = &self.stabilisation {
+            for (d, f) in f_int.iter_mut().enumerate() {
+                let drag = st.stiffness * st.volume[d] * (u[d] - st.reference[d]);
+                *f += drag;
+                drag_force += drag.abs();
+            }
+            if tangent {
+                drag_diagonal = st.volume.iter().map(|v| st.stiffness * v).collect();
+            }
+        }
         Ok(Evaluation {
             body,
             contact,
             f_int,
+            drag_diagonal,
+            drag_force,
         })
     }
 }

@@ -1,7 +1,8 @@
 //! The tidens solver driver (units: mm, N, MPa, s).
 //!
-//! [`Simulation`] (the entry type) presses a [`Scene`] (a meshed [`Cell`] or a
-//! verification block) in a rigid die: frictionless rigid planes handled
+//! [`Simulation`] (the entry type) presses a [`Scene`] (a meshed [`Cell`], a
+//! verification block, or a periodic cell of whole particles, see
+//! `periodic`) in a rigid die: frictionless rigid planes handled
 //! analytically ([`constraints`]), the piston displacement as one extra
 //! unknown loaded by `f sigma(t) Lx Ly` ([`LoadHistory`]), implicit
 //! backward-Euler steps solved by Newton with line search (`newton`,
@@ -24,6 +25,7 @@ mod load_path;
 mod newton;
 mod ordering;
 mod output;
+mod periodic;
 mod scene;
 mod settings;
 mod simulation;
@@ -37,6 +39,7 @@ pub use error::{LinearError, SolverError, StepFailure};
 pub use load::LoadHistory;
 pub use load_path::TOUCH_TOLERANCE;
 pub use output::{CurvePoint, FULL_DENSITY, Fields, RunStats, Status};
+pub use periodic::{ParticleImage, Periodic, PlacedSpheroid};
 pub use scene::{MAX_MESH_LEVEL, MeshOptions, Particle, Scene};
 pub use settings::{ContactOptions, HexFacets, NewtonSettings, Settings};
 pub use simulation::Simulation;

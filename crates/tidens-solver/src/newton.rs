@@ -169,6 +169,13 @@ impl Simulation {
                 r[m] += f_int[d];
             }
         }
+        // The z force on a periodic image above or below the cell also
+        // pulls on the cell's height.
+        if self.constraints.has_piston_coupling() {
+            for (d, f) in f_int.iter().enumerate() {
+                r[n] += self.constraints.piston_coupling(d) * f;
+            }
+        }
         r[n] += force;
         r
     }
@@ -259,6 +266,26 @@ impl Simulation {
         self.constraints.reset_flips();
         let fail = |reason: StepFailure, iterations: usize| Failed { reason, iterations };
         let (mut u, mut piston) = self.predict(dt);
+        if let Some(st) = &mut self.stabilisation {
+            // The drag of the step is measured from the affine motion the
+            // predictor expects, and scaled by its strain increment.
+            let lift = piston - self.state.piston;
+            for (d, r) in st.reference.iter_mut().enumerate() {
+                *r = self.state.u[d] + st.height_fraction[d] * lift;
+            }
+            let load = &self.settings.load;
+            let stress = load.knockdown * load.stress * load.factor(t1);
+            let elastic = load.knockdown
+                * load.stress
+                * (load.factor(t1) - load.factor(self.state.time)).abs()
+                / self.body.material().young;
+            let strain = (lift.abs() / (self.lengths[2] + self.state.piston)).max(elastic);
+            st.stiffness = if strain > 0.0 {
+                st.scale * stress / strain
+            } else {
+                0.0
+            };
+        }
         if debug_enabled() {
             eprintln!("  step from t = {:.6e} s, dt = {dt:.4e} s", self.state.time);
         }

@@ -108,6 +108,10 @@ pub struct RunStats {
     pub linear_seconds: f64,
     /// Times the sparsity pattern grew for new particle contacts.
     pub pattern_rebuilds: usize,
+    /// Periodic cells: the largest stabilising drag of an accepted step,
+    /// summed over the nodes, over the piston force then (0 elsewhere).
+    #[serde(default)]
+    pub max_drag_share: f64,
 }
 
 impl Simulation {

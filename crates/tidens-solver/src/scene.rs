@@ -126,6 +126,9 @@ pub struct Scene {
     pub cell: Option<Cell>,
     /// The options the cell was meshed with (none for the blocks).
     pub mesh_options: Option<MeshOptions>,
+    /// Set for a periodic cell ([`Scene::periodic`]): no rigid planes, and
+    /// the particles' periodic images, whose nodes follow the particles'.
+    pub periodic: Option<crate::periodic::Periodic>,
 }
 
 impl Scene {
@@ -160,29 +163,7 @@ impl Scene {
             } else {
                 piece
             };
-            let (n0, e0) = (mesh.nodes.len(), mesh.elements.len());
-            mesh.nodes.extend_from_slice(&piece.nodes);
-            mesh.elements
-                .extend(piece.elements.iter().map(|el| el.map(|n| n + n0)));
-            let mut surface = Vec::new();
-            for f in &piece.boundary {
-                let face = BoundaryFace {
-                    nodes: f.nodes.map(|n| n + n0),
-                    element: f.element + e0,
-                    kind: f.kind,
-                };
-                if face.kind == FaceKind::Curved {
-                    surface.push(face.nodes);
-                }
-                mesh.boundary.push(face);
-            }
-            particles.push(Particle {
-                octant: k,
-                nodes: (n0, piece.nodes.len()),
-                elements: (e0, piece.elements.len()),
-                surface,
-                triangles: Vec::new(),
-            });
+            particles.push(append_piece(&mut mesh, &piece, k));
         }
         check_no_overlap(cell, &mesh, &particles)?;
         Ok(Scene {
@@ -195,6 +176,7 @@ impl Scene {
             tet_mesh: None,
             cell: Some(cell.clone()),
             mesh_options: Some(*options),
+            periodic: None,
         })
     }
 
@@ -324,6 +306,7 @@ impl Scene {
             tet_mesh: None,
             cell: None,
             mesh_options: None,
+            periodic: None,
         })
     }
 
@@ -341,13 +324,43 @@ impl Scene {
             tet_mesh: None,
             cell: None,
             mesh_options: None,
+            periodic: None,
         })
+    }
+}
+
+/// Appends the mesh `piece` of particle `index` to `mesh` (its nodes,
+/// elements and boundary faces renumbered after those there), and returns
+/// the particle: its ranges and its curved boundary quads.
+pub(crate) fn append_piece(mesh: &mut HexMesh, piece: &HexMesh, index: usize) -> Particle {
+    let (n0, e0) = (mesh.nodes.len(), mesh.elements.len());
+    mesh.nodes.extend_from_slice(&piece.nodes);
+    mesh.elements
+        .extend(piece.elements.iter().map(|el| el.map(|n| n + n0)));
+    let mut surface = Vec::new();
+    for f in &piece.boundary {
+        let face = BoundaryFace {
+            nodes: f.nodes.map(|n| n + n0),
+            element: f.element + e0,
+            kind: f.kind,
+        };
+        if face.kind == FaceKind::Curved {
+            surface.push(face.nodes);
+        }
+        mesh.boundary.push(face);
+    }
+    Particle {
+        octant: index,
+        nodes: (n0, piece.nodes.len()),
+        elements: (e0, piece.elements.len()),
+        surface,
+        triangles: Vec::new(),
     }
 }
 
 /// The hexahedra of one particle as a mesh of their own (node and element
 /// numbers from 0).
-fn hex_piece(mesh: &HexMesh, particle: &Particle) -> HexMesh {
+pub(crate) fn hex_piece(mesh: &HexMesh, particle: &Particle) -> HexMesh {
     let (n0, nc) = particle.nodes;
     let (e0, ec) = particle.elements;
     HexMesh {

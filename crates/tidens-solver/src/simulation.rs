@@ -78,6 +78,8 @@ pub struct Simulation {
     pub(crate) contact: Option<ParticleContact>,
     /// Largest particle-contact penetration accepted in a step \[mm\].
     pub(crate) penetration_tol: f64,
+    /// The drag that holds the particles of a periodic cell.
+    pub(crate) stabilisation: Option<crate::evaluation::Stabilisation>,
 }
 
 /// Contact between the particles of `scene`, when it has more than one: the
@@ -103,7 +105,7 @@ fn particle_contact(
     material: &Material,
     settings: &Settings,
 ) -> Result<Option<ParticleContact>, SolverError> {
-    if scene.particles.len() < 2 {
+    if scene.particles.len() < 2 && scene.periodic.is_none() {
         return Ok(None);
     }
     let surfaces = scene
@@ -120,6 +122,17 @@ fn particle_contact(
         })
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| SolverError::Unsupported(e.to_string()))?;
+    // The element size and the search reach come from the particles' own
+    // surfaces; their periodic images follow them.
+    let images: Vec<ContactSurface> = match &scene.periodic {
+        Some(periodic) => periodic
+            .images
+            .iter()
+            .map(|im| surfaces[im.particle].image(|n| im.node_of(n).unwrap_or(usize::MAX)))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| SolverError::Unsupported(e.to_string()))?,
+        None => Vec::new(),
+    };
     let (count, area) = surfaces
         .iter()
         .flat_map(|s| s.areas.iter())
@@ -129,7 +142,7 @@ fn particle_contact(
     // The stress the cell feels [MPa].
     let stress = settings.load.knockdown * settings.load.stress;
     let contact = ParticleContact::new(
-        surfaces,
+        surfaces.into_iter().chain(images).collect(),
         ContactSettings {
             mode: c.mode,
             penalty: (c.penalty_factor * material.young / h).min(PENALTY_CAP * stress / h),
@@ -143,6 +156,63 @@ fn particle_contact(
     )
     .map_err(|e| SolverError::Unsupported(e.to_string()))?;
     Ok(Some(contact))
+}
+
+/// The drag of a periodic cell (see [`crate::evaluation::Stabilisation`]).
+fn stabilisation(scene: &Scene, constraints: &Constraints) -> crate::evaluation::Stabilisation {
+    let n_dof = constraints.dof_count();
+    let map = constraints.equation_map();
+    let mut volume = vec![0.0; n_dof];
+    for p in &scene.particles {
+        let (first, count) = p.nodes;
+        let share = crate::scene::hex_piece(&scene.mesh, p).volume() / count as f64;
+        for d in 3 * first..3 * (first + count) {
+            if map[d] == d {
+                volume[d] = share;
+            }
+        }
+    }
+    let lz = scene.lengths[2];
+    let height_fraction = (0..n_dof)
+        .map(|d| {
+            if d % 3 == 2 {
+                scene.nodes()[d / 3][2] / lz
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    crate::evaluation::Stabilisation {
+        volume,
+        height_fraction,
+        scale: crate::evaluation::STABILISATION / (scene.radius * scene.radius),
+        stiffness: 0.0,
+        reference: vec![0.0; n_dof],
+    }
+}
+
+/// A periodic cell's constraints: its images follow their particles, and
+/// the first node of the first particle is pinned (nothing else holds the
+/// cell's rigid translation).
+fn periodic_constraints(
+    scene: &Scene,
+    periodic: &crate::periodic::Periodic,
+) -> Result<Constraints, SolverError> {
+    let mut c = Constraints::without_planes(scene.nodes(), scene.lengths);
+    let images: Vec<(usize, usize, [i8; 3])> = periodic
+        .images
+        .iter()
+        .flat_map(|im| {
+            im.originals
+                .iter()
+                .enumerate()
+                .map(move |(k, &n)| (im.first + k, n, im.periods))
+        })
+        .collect();
+    c.set_images(&images)?;
+    let pinned = scene.particles.first().map_or(0, |p| p.nodes.0);
+    c.pin(&[3 * pinned, 3 * pinned + 1, 3 * pinned + 2])?;
+    Ok(c)
 }
 
 impl Simulation {
@@ -171,13 +241,16 @@ impl Simulation {
                     * settings.load.stress,
             );
         }
-        let constraints = Constraints::new(
-            scene.nodes(),
-            scene.boundary_faces(),
-            scene.lengths,
-            scene.lateral_walls,
-            settings.contact.tied_planes,
-        )?;
+        let constraints = match &scene.periodic {
+            Some(periodic) => periodic_constraints(scene, periodic)?,
+            None => Constraints::new(
+                scene.nodes(),
+                scene.boundary_faces(),
+                scene.lengths,
+                scene.lateral_walls,
+                settings.contact.tied_planes,
+            )?,
+        };
         let assembler = Assembler::new(&body, &constraints);
         let contact = particle_contact(scene, &material, &settings)?;
         let [lx, ly, lz] = scene.lengths;
@@ -210,6 +283,10 @@ impl Simulation {
             dt_min,
         );
         let penetration_tol = 0.5 * settings.contact.penetration_tolerance * scene.radius;
+        let stabilisation = scene
+            .periodic
+            .as_ref()
+            .map(|_| stabilisation(scene, &constraints));
         let n_dof = constraints.dof_count();
         let eval = body.evaluate(&vec![0.0; n_dof], 0.0, false)?;
         let volume = eval.volume();
@@ -237,6 +314,7 @@ impl Simulation {
             status: Status::Running,
             contact,
             penetration_tol,
+            stabilisation,
         };
         let point = sim.curve_point(volume, 0, 0, 0.0, 0.0);
         sim.curve.push(point);
@@ -526,6 +604,10 @@ impl Simulation {
         }
         self.stats.steps += 1;
         self.stats.newton_iterations += iterations;
+        if f1 > 0.0 {
+            let share = s.eval.drag_force / (f1 * self.full_force);
+            self.stats.max_drag_share = self.stats.max_drag_share.max(share);
+        }
         self.body.commit(&s.eval.body);
         let volume = s.eval.body.volume();
         let state = &mut self.state;
