@@ -34,6 +34,7 @@ CURVE_COLUMNS = (
     "contacts",
     "particle_contacts",
     "max_penetration_mm",
+    "max_depth_mm",
 )
 
 

@@ -156,7 +156,17 @@ class Result:
         the bulk modulus K, with a factor 2 for the lateral stresses),
         ``penetration_ok`` (the largest penetration over the largest
         particle semi-axis, ``max_penetration_over_radius``, within the
-        contact's ``penetration_tolerance``); ``ok`` when all hold."""
+        contact's ``penetration_tolerance``); ``ok`` when all hold.
+
+        Beside them, not yet part of ``ok``: ``max_depth_over_radius``, the
+        largest depth of any surface node inside another particle (the
+        curve's ``max_depth_mm``, parry's signed distance, whether a
+        contact link measures the node or not) over the same radius. The
+        penetration above is that of the linked nodes only; a node whose
+        foot falls past every facet's margin is not linked and can go on
+        in unseen (measured at level 1, to rho = 0.9 at 10 MPa: 2.1e-3 of
+        the radius on bcc, 1.3e-3 on sc2, 2.7e-5 on fcc; 9.6e-4 on bcc at
+        level 2). ``None`` for outputs written before it was measured."""
         c = self.case
         m = c.material
         rho = self.rel_density
@@ -177,6 +187,8 @@ class Result:
         }
         out["volume_kept"] = out["volume_change"] <= out["volume_change_bound"]
         out["penetration_ok"] = out["max_penetration_over_radius"] <= c.solver.penetration_tolerance
+        depth = self.curve.get("max_depth_mm")
+        out["max_depth_over_radius"] = float(np.max(depth)) / radius if depth is not None else None
         out["ok"] = out["monotone"] and out["finite"] and out["volume_kept"] and out["penetration_ok"]
         return out
 
@@ -235,6 +247,7 @@ class Result:
             "nodes": self.nodes,
             "elements": self.elements,
             "max_penetration_mm": float(np.max(self.curve["max_penetration_mm"])),
+            "max_depth_mm": float(np.max(self.curve["max_depth_mm"])) if "max_depth_mm" in self.curve else None,
             "checks": self.checks(),
             "stats": self.stats,
         }

@@ -548,6 +548,48 @@ impl ParticleContact {
         self.pairing = pairing;
     }
 
+    /// The largest depth \[mm\] of any slave node inside another surface in
+    /// the configuration `x`, paired or not: parry's distance to the
+    /// nearest point of the surface, for the nodes on its inner side (by
+    /// the pseudo-normal there) within its bounding box grown by the search
+    /// distance; 0 if none is inside.
+    ///
+    /// The contact terms measure the nodes that are paired with a facet
+    /// only. A node left unpaired (its foot beyond every facet's margin)
+    /// can go on into the other particle unseen: on the sc2 cell of
+    /// c/a = 5 at level 3 one sat 3.2e-3 mm inside while the paired nodes
+    /// read at most 1.1e-7 mm, and on bcc at level 1 one 1.1e-4 mm inside
+    /// (2.1e-3 of the radius) at rho = 0.9.
+    pub fn max_depth(&self, x: &[f64]) -> f64 {
+        let pairs = self.candidate_pairs(x);
+        let meshes = self.search_meshes(x, &pairs, |_| true);
+        pairs
+            .par_iter()
+            .map(|&(s, m)| {
+                let Some(mesh) = meshes[m].as_ref() else {
+                    return 0.0;
+                };
+                let (lo, hi) = self.surfaces[m].bounding_box(x);
+                let d = self.settings.search_distance;
+                self.surfaces[s]
+                    .nodes
+                    .iter()
+                    .map(|&n| point(x, n))
+                    .filter(|p| (0..3).all(|i| p[i] >= lo[i] - d && p[i] <= hi[i] + d))
+                    .map(|p| {
+                        let q = PVector::new(p[0], p[1], p[2]);
+                        let (proj, _) = mesh.project_local_point_and_get_location(q, false);
+                        if proj.is_inside {
+                            (proj.point - q).length()
+                        } else {
+                            0.0
+                        }
+                    })
+                    .fold(0.0, f64::max)
+            })
+            .reduce(|| 0.0, f64::max)
+    }
+
     /// Pairs the slave nodes with the master surfaces within the search
     /// distance that they are not paired with yet, in the configuration
     /// `x`; returns how many of the new pairs touch or press (so that a

@@ -157,3 +157,35 @@ fn an_image_needs_its_nodes_in_the_originals_order() {
     assert_eq!(image.areas, s.areas);
     assert!(image.nodes.iter().zip(&s.nodes).all(|(i, o)| *i == o + 50));
 }
+
+#[test]
+fn the_depth_of_nodes_inside_is_seen_paired_or_not() {
+    // The dome presses 4.3e-3 mm into the bowl at its centre. Before any
+    // pairing no term measures it; the signed distance does, and once
+    // paired the deepest term reads the same to the faceting (a term
+    // measures on its facet's plane, the distance on the nearest facet).
+    let mut nodes = Vec::new();
+    let [a, b] = bowl_and_dome(&mut nodes, [0.0; 3]);
+    let x: Vec<f64> = nodes.iter().flatten().copied().collect();
+    let surfaces = vec![
+        ContactSurface::from_quads_as_triangles(&a, &nodes).unwrap(),
+        ContactSurface::from_quads_as_triangles(&b, &nodes).unwrap(),
+    ];
+    let mut c = contact(surfaces);
+    assert!(c.evaluate(&x, false).terms.is_empty());
+    let depth = c.max_depth(&x);
+    assert!(depth > 4e-3 && depth < 4.4e-3, "{depth}");
+    c.pair(&x);
+    let deepest = c.evaluate(&x, false).max_penetration();
+    assert!(
+        (deepest - depth).abs() < 1e-5 * depth,
+        "{deepest} against {depth}"
+    );
+    // Apart, nothing is inside.
+    let apart: Vec<f64> = x
+        .iter()
+        .enumerate()
+        .map(|(d, v)| if d >= 27 && d % 3 == 2 { v - 0.01 } else { *v })
+        .collect();
+    assert_eq!(c.max_depth(&apart), 0.0);
+}

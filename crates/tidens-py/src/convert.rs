@@ -23,7 +23,7 @@ impl Value {
 }
 
 /// Number of entries of a curve point.
-const POINT_LEN: usize = 15;
+const POINT_LEN: usize = 16;
 
 /// The entries of a curve point, in one place for `advance()` and `curve()`.
 fn point_entries(p: &CurvePoint) -> [(&'static str, Value); POINT_LEN] {
@@ -44,6 +44,7 @@ fn point_entries(p: &CurvePoint) -> [(&'static str, Value); POINT_LEN] {
         ("contacts", Count(p.contacts)),
         ("particle_contacts", Count(p.particle_contacts)),
         ("max_penetration_mm", Float(p.max_penetration)),
+        ("max_depth_mm", Float(p.max_depth)),
     ]
 }
 
@@ -184,6 +185,7 @@ mod tests {
             contacts: 7,
             particle_contacts: 0,
             max_penetration: 0.0,
+            max_depth: 0.0,
         }
     }
 

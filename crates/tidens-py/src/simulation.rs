@@ -548,7 +548,9 @@ impl PySimulation {
     /// newton_iterations, newton_total, dt_s, max_strain_increment,
     /// particle_volume_mm3, time_error_s, contacts (plane dofs in contact),
     /// particle_contacts (nodes pressed on another particle), max_penetration_mm
-    /// (into a plane or a particle).
+    /// (into a plane, or into a particle through a node's link to a facet),
+    /// max_depth_mm (of any surface node inside another particle, linked or
+    /// not).
     /// Once stopped, returns the last point again. Raises ConvergenceError if
     /// the step fails; the state stays at the last converged step.
     fn advance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {

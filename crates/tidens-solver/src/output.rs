@@ -40,9 +40,16 @@ pub struct CurvePoint {
     /// Surface nodes pressed against another particle (each contact pass
     /// counts its slave nodes that carry pressure; tied: nodes tied).
     pub particle_contacts: usize,
-    /// Largest penetration of a surface node into a rigid plane or into
-    /// another particle \[mm\].
+    /// Largest penetration of a surface node into a rigid plane or, through
+    /// its link to a facet, into another particle \[mm\].
     pub max_penetration: f64,
+    /// Largest depth of a surface node inside another particle, paired
+    /// with one of its facets or not \[mm\]: parry's distance to the
+    /// nearest point, on the inner side of its pseudo-normal (see
+    /// `ParticleContact::max_depth`). Above `max_penetration` where a node
+    /// that no link measures has gone in.
+    #[serde(default)]
+    pub max_depth: f64,
 }
 
 /// Why a run stopped, or that it goes on.
@@ -150,6 +157,10 @@ impl Simulation {
                 .constraints
                 .max_penetration(&state.u, state.piston)
                 .max(state.contact.max_penetration()),
+            max_depth: self
+                .contact
+                .as_ref()
+                .map_or(0.0, |c| c.max_depth(&self.current_coordinates(&state.u))),
         }
     }
 
