@@ -162,11 +162,12 @@ class Result:
         largest depth of any surface node inside another particle (the
         curve's ``max_depth_mm``, parry's signed distance, whether a
         contact link measures the node or not) over the same radius. The
-        penetration above is that of the linked nodes only; a node whose
-        foot falls past every facet's margin is not linked and can go on
-        in unseen (measured at level 1, to rho = 0.9 at 10 MPa: 2.1e-3 of
-        the radius on bcc, 1.3e-3 on sc2, 2.7e-5 on fcc; 9.6e-4 on bcc at
-        level 2). ``None`` for outputs written before it was measured."""
+        penetration above is what the links read; a node linked to a
+        triangle it has slid off, across a fold of the surface, or left
+        unlinked, can be deeper (measured at level 1, to rho = 0.9 at
+        10 MPa: 2.1e-3 of the radius on bcc, 1.3e-3 on sc2, 2.7e-5 on fcc;
+        9.6e-4 on bcc at level 2). ``None`` for outputs written before it
+        was measured."""
         c = self.case
         m = c.material
         rho = self.rel_density

@@ -554,12 +554,14 @@ impl ParticleContact {
     /// the pseudo-normal there) within its bounding box grown by the search
     /// distance; 0 if none is inside.
     ///
-    /// The contact terms measure the nodes that are paired with a facet
-    /// only. A node left unpaired (its foot beyond every facet's margin)
+    /// The contact terms measure each node on the facet it is paired
+    /// with. A node left unpaired (its foot beyond every facet's margin)
     /// can go on into the other particle unseen: on the sc2 cell of
     /// c/a = 5 at level 3 one sat 3.2e-3 mm inside while the paired nodes
-    /// read at most 1.1e-7 mm, and on bcc at level 1 one 1.1e-4 mm inside
-    /// (2.1e-3 of the radius) at rho = 0.9.
+    /// read at most 1.1e-7 mm. So can a node kept on a triangle it has
+    /// slid off, measured on that triangle's plane carried past an inward
+    /// fold: on bcc at level 1 one read 8e-10 mm there and was 1.1e-4 mm
+    /// inside (2.1e-3 of the radius) at rho = 0.9.
     pub fn max_depth(&self, x: &[f64]) -> f64 {
         let pairs = self.candidate_pairs(x);
         let meshes = self.search_meshes(x, &pairs, |_| true);
