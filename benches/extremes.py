@@ -138,6 +138,7 @@ def run_one(cell_name: str, v: Variant, level: int, timeout: float) -> dict[str,
         volume_change=checks["volume_change"],
         volume_bound=checks["volume_change_bound"],
         penetration_over_radius=checks["max_penetration_over_radius"],
+        depth_over_radius=checks.get("max_depth_over_radius"),
         physical=checks["ok"],
         stats=dict(r.stats),
         dofs=case.simulation(v.until_density, v.until_time, []).degrees_of_freedom,
@@ -162,18 +163,18 @@ def report(rows: list[dict[str, Any]]) -> None:
     for cell, rs in by_cell.items():
         base = next((r for r in rs if r["case"] == "base" and "wall_s" in r), None)
         print(f"\n{cell}")
-        print("| case | status | wall [s] | / base | steps | Newton | / base | failed attempts | final rho | t(0.9) [s] | monotone | finite | |dV/V| (bound) | pen / R | physical |")
-        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+        print("| case | status | wall [s] | / base | steps | Newton | / base | failed attempts | final rho | t(0.9) [s] | monotone | finite | |dV/V| (bound) | pen / R | depth / R | physical |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
         for r in rs:
             if r["status"] == "refused":
-                print(f"| {r['case']} | refused: {r['reason']} |" + " |" * 13)
+                print(f"| {r['case']} | refused: {r['reason']} |" + " |" * 14)
                 continue
             ratio = r["wall_s"] / base["wall_s"] if base else None
             newton_ratio = r["newton"] / base["newton"] if base else None
             print(
                 f"| {r['case']} | {r['status']} | {fmt(r['wall_s'], '.1f')} | {fmt(ratio, '.2f')} | {r['steps']} | {r['newton']} | {fmt(newton_ratio, '.2f')} | "
                 f"{r['failed_attempts']} | {fmt(r['final_density'], '.4f')} | {fmt(r['t09_s'])} | {fmt(r['monotone'])} | {fmt(r['finite'])} | "
-                f"{fmt(r['volume_change'], '.2e')} ({fmt(r['volume_bound'], '.1e')}) | {fmt(r['penetration_over_radius'], '.1e')} | {fmt(r['physical'])} |"
+                f"{fmt(r['volume_change'], '.2e')} ({fmt(r['volume_bound'], '.1e')}) | {fmt(r['penetration_over_radius'], '.1e')} | {fmt(r.get('depth_over_radius'), '.1e')} | {fmt(r['physical'])} |"
             )
         costs(rs)
 

@@ -156,18 +156,14 @@ class Result:
         the bulk modulus K, with a factor 2 for the lateral stresses),
         ``penetration_ok`` (the largest penetration over the largest
         particle semi-axis, ``max_penetration_over_radius``, within the
-        contact's ``penetration_tolerance``); ``ok`` when all hold.
-
-        Beside them, not yet part of ``ok``: ``max_depth_over_radius``, the
-        largest depth of any surface node inside another particle (the
-        curve's ``max_depth_mm``, parry's signed distance, whether a
-        contact link measures the node or not) over the same radius. The
-        penetration above is what the links read; a node linked to a
-        triangle it has slid off, across a fold of the surface, or left
-        unlinked, can be deeper (measured at level 1, to rho = 0.9 at
-        10 MPa: 2.1e-3 of the radius on bcc, 1.3e-3 on sc2, 2.7e-5 on fcc;
-        9.6e-4 on bcc at level 2). ``None`` for outputs written before it
-        was measured."""
+        contact's ``penetration_tolerance``), ``depth_ok`` (the largest
+        depth of any surface node inside another particle, the curve's
+        ``max_depth_mm`` over the same radius, ``max_depth_over_radius``,
+        within the same tolerance: parry's signed distance, whether a
+        contact term measures the node or not, so that a node left
+        unlinked, or measured on a facet it has slid off, cannot hide; True
+        for outputs written before it was measured, where it is ``None``);
+        ``ok`` when all hold."""
         c = self.case
         m = c.material
         rho = self.rel_density
@@ -190,7 +186,10 @@ class Result:
         out["penetration_ok"] = out["max_penetration_over_radius"] <= c.solver.penetration_tolerance
         depth = self.curve.get("max_depth_mm")
         out["max_depth_over_radius"] = float(np.max(depth)) / radius if depth is not None else None
-        out["ok"] = out["monotone"] and out["finite"] and out["volume_kept"] and out["penetration_ok"]
+        out["depth_ok"] = out["max_depth_over_radius"] is None or out["max_depth_over_radius"] <= c.solver.penetration_tolerance
+        out["ok"] = (
+            out["monotone"] and out["finite"] and out["volume_kept"] and out["penetration_ok"] and out["depth_ok"]
+        )
         return out
 
     def summary(self) -> dict[str, Any]:
