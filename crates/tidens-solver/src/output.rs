@@ -147,12 +147,16 @@ impl Simulation {
             particle_volume: volume,
             time_error: self.control.time_error(),
             contacts: self.constraints.contact_counts().iter().sum(),
+            // Nodes pressed on another particle, once each (a node in a
+            // fold of the other's surface presses on two of its facets).
             particle_contacts: state
                 .contact
                 .terms
                 .iter()
                 .filter(|t| t.pressure > 0.0)
-                .count(),
+                .map(|t| (t.slave, t.master.0))
+                .collect::<std::collections::BTreeSet<_>>()
+                .len(),
             max_penetration: self
                 .constraints
                 .max_penetration(&state.u, state.piston)
