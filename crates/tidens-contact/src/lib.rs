@@ -791,15 +791,27 @@ impl ParticleContact {
         let own = self.node_term(x, s, k, link, with_tangent);
         let lambdas = self.node_state(s, k, link.master).fold_lambda;
         let ring = self.surfaces[link.master].ring(link.facet);
-        let folds = ring.iter().take(FOLD_SLOTS).enumerate().filter_map(move |(j, &g)| {
-            let weight = self.fold(x, link.master, link.facet, g)?;
-            let neighbour = Link {
-                facet: g,
-                start: [0.0; 2],
-                ..*link
-            };
-            self.plane_term(x, s, k, &neighbour, lambdas[j], Some((j, weight)), with_tangent)
-        });
+        let folds = ring
+            .iter()
+            .take(FOLD_SLOTS)
+            .enumerate()
+            .filter_map(move |(j, &g)| {
+                let weight = self.fold(x, link.master, link.facet, g)?;
+                let neighbour = Link {
+                    facet: g,
+                    start: [0.0; 2],
+                    ..*link
+                };
+                self.plane_term(
+                    x,
+                    s,
+                    k,
+                    &neighbour,
+                    lambdas[j],
+                    Some((j, weight)),
+                    with_tangent,
+                )
+            });
         own.into_iter().chain(folds)
     }
 

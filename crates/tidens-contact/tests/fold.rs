@@ -158,11 +158,17 @@ fn across_a_valley_the_deeper_term_reads_the_true_depth() {
                 "s = {s}: reads {deepest}, true depth {truth}"
             );
         } else {
-            assert!(deepest <= truth + 1e-12 && deepest > 0.98 * truth, "s = {s}: {deepest} {truth}");
+            assert!(
+                deepest <= truth + 1e-12 && deepest > 0.98 * truth,
+                "s = {s}: {deepest} {truth}"
+            );
         }
         largest_gap = largest_gap.max(truth - t[0].0);
     }
-    assert!(largest_gap > 1e-2, "the link's plane under-read by {largest_gap}");
+    assert!(
+        largest_gap > 1e-2,
+        "the link's plane under-read by {largest_gap}"
+    );
 }
 
 /// Where the halves fold outward (a ridge) the link's plane extended lies
@@ -196,6 +202,9 @@ fn the_term_across_a_fold_weighs_in_with_the_fold() {
     let t = 0.1;
     let w = weight(rise_for(t * tidens_contact::FULL_FOLD)).unwrap();
     let expected = t * t * t * (10.0 - 15.0 * t + 6.0 * t * t);
-    assert!((w - expected).abs() < 1e-9 * expected, "{w} against {expected}");
+    assert!(
+        (w - expected).abs() < 1e-9 * expected,
+        "{w} against {expected}"
+    );
     assert_eq!(weight(rise_for(2.0 * tidens_contact::FULL_FOLD)), Some(1.0));
 }
