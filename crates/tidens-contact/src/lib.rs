@@ -215,6 +215,10 @@ struct Link {
     /// node read 4.1e-3 mm deep at one and 1e-4 mm at the other (sc2 of
     /// c/a = 5 at level 3, where Newton then failed at every step length).
     start: [f64; 2],
+    /// The node's penetration \[mm\] when the step started (the touch
+    /// force's reference, see [`ParticleContact::set_touch_force`]).
+    #[serde(default)]
+    reference: f64,
 }
 
 /// The facets one slave node is paired with for the step, at most one per
@@ -257,6 +261,10 @@ pub struct ParticleContact {
     /// distance (see [`ParticleContact::pair`]).
     #[serde(skip)]
     pairing: Vec<Vec<NodePairing>>,
+    /// Stiffness \[MPa/mm\] of the touch force, if any (see
+    /// [`ParticleContact::set_touch_force`]).
+    #[serde(skip)]
+    touch_force: Option<f64>,
 }
 
 /// The contact contributions at one configuration.
@@ -328,6 +336,7 @@ impl ParticleContact {
             settings,
             state,
             pairing,
+            touch_force: None,
         })
     }
 
@@ -481,9 +490,55 @@ impl ParticleContact {
     /// step would let a node on the edge between two facets hop between them
     /// from step to step (their patches differ slightly beyond their edges),
     /// and the two equilibria it hops between make the piston chatter.
+    ///
+    /// With a touch force ([`ParticleContact::set_touch_force`]) each
+    /// link's reference is the node's penetration now.
     pub fn pair(&mut self, x: &[f64]) {
         self.drop_left(x);
         self.pair_unpaired(x);
+        if self.touch_force.is_none() {
+            return;
+        }
+        let references: Vec<Vec<Vec<f64>>> = self
+            .pairing
+            .iter()
+            .enumerate()
+            .map(|(s, nodes)| {
+                nodes
+                    .iter()
+                    .enumerate()
+                    .map(|(k, links)| links.iter().map(|l| self.measure(x, s, k, l).1).collect())
+                    .collect()
+            })
+            .collect();
+        for (nodes, refs) in self.pairing.iter_mut().zip(references) {
+            for (links, r) in nodes.iter_mut().zip(refs) {
+                for (l, v) in links.iter_mut().zip(r) {
+                    l.reference = v;
+                }
+            }
+        }
+    }
+
+    /// Makes the touch stiffness of unpressed nodes a force too: a spring
+    /// of `stiffness` \[MPa/mm\] per unit tributary area on the change of
+    /// the node's penetration since the step started (since
+    /// [`ParticleContact::pair`]), in place of the tangent-only touch
+    /// stiffness, while its pair of surfaces presses nowhere. None (the
+    /// default): the touch stiffness is in the tangent only.
+    ///
+    /// Tangent-only, the stiffness lets Newton move a body toward a contact
+    /// that has not closed, but nothing in the residual carries the load
+    /// until it closes: where a body's contacts all start open (whole
+    /// spheres meshed alike touch facet to facet with a gap of the
+    /// faceting, 4.8e-4 mm = 1e-2 R at mesh level 1, when the meshes are
+    /// turned against each other), the residual stays the whole load and
+    /// the line search takes 2 to 10 % of each direction (the body turns
+    /// in it, held only by the drag), and the run failed in its first
+    /// steps. With the spring the load is carried, across the gap, by the
+    /// nodes about to touch, over the step in which they close it.
+    pub fn set_touch_force(&mut self, stiffness: Option<f64>) {
+        self.touch_force = stiffness;
     }
 
     /// At a converged state `x`, what [`ParticleContact::pair`] will do at
@@ -543,6 +598,7 @@ impl ParticleContact {
             master: m,
             facet: f,
             start: [0.0; 2],
+            reference: 0.0,
         };
         self.measure(x, s, k, &link)
     }
@@ -655,11 +711,16 @@ impl ParticleContact {
                         .filter(|&&m| !self.pairing[s][k].iter().any(|l| l.master == m))
                         .filter_map(|&m| {
                             let (facet, start) = self.nearest(x, s, k, m, meshes[m].as_ref()?)?;
-                            Some(Link {
+                            let mut link = Link {
                                 master: m,
                                 facet,
                                 start,
-                            })
+                                reference: 0.0,
+                            };
+                            if self.touch_force.is_some() {
+                                link.reference = self.measure(x, s, k, &link).1;
+                            }
+                            Some(link)
                         })
                         .collect()
                 })
@@ -744,6 +805,7 @@ impl ParticleContact {
                 .is_some();
             if t.pressure <= 0.0 && !tied && pressed.contains(&(t.slave.0, t.master.0)) {
                 t.tangent.fill(0.0);
+                t.force.fill(0.0);
             }
         }
         ContactEvaluation { terms }
@@ -925,16 +987,23 @@ impl ParticleContact {
         // A term across a fold acts with its weight: the augmented
         // Lagrangian of a penalty `w eps` and multiplier `w lambda`.
         let weight = fold.map_or(1.0, |(_, w)| w);
+        let spring = match self.touch_force {
+            Some(k) if pressure <= 0.0 && fold.is_none() => Some(k),
+            _ => None,
+        };
+        let traction = spring.map_or(pressure, |k| k * (pen - link.reference));
         let mut force = [0.0; TERM_DOFS];
         for (f, g) in force.iter_mut().zip(grad.iter()) {
-            *f = area * weight * pressure * g;
+            *f = area * weight * traction * g;
         }
         let stiffness = if pressure > 0.0 {
             eps
+        } else if let Some(k) = spring {
+            k
         } else {
             (TOUCH_STIFFNESS * eps).min(self.settings.touch_stiffness_cap)
         };
-        let (kg, kh) = (area * weight * stiffness, area * weight * pressure);
+        let (kg, kh) = (area * weight * stiffness, area * weight * traction);
         let tangent = match (with_tangent, hess) {
             (true, Some(h)) => {
                 let mut k = Vec::with_capacity(TERM_DOFS * TERM_DOFS);

@@ -245,3 +245,115 @@ fn the_tangent_without_curvature_is_semidefinite_and_what_it_leaves_out_is_not()
         "the curvature part is not indefinite: eigenvalues in [{left_out_lowest:e}, {left_out_highest:e}]"
     );
 }
+
+/// The touch force ([`ParticleContact::set_touch_force`]): nodes near the
+/// other surface but apart from it carry a spring on the change of their
+/// penetration since pairing. At the pairing configuration it is zero;
+/// moved on, each node's force is the spring's on its own reading, and
+/// the tangent, curvature included, is the force's derivative.
+#[test]
+fn the_touch_force_is_a_spring_on_the_change_of_penetration_since_pairing() {
+    for triangles in [false, true] {
+        // Apart by 0.01 at the closest point; the nodes near the middle
+        // within the touch band (a tenth of the search distance, 0.06).
+        let (nodes, lower, upper) = patches(-0.01);
+        let surface = |faces: &[[usize; 4]]| {
+            if triangles {
+                ContactSurface::from_triangles(&split(faces), &nodes).unwrap()
+            } else {
+                ContactSurface::from_quads(faces, &nodes).unwrap()
+            }
+        };
+        let mut contact = ParticleContact::new(
+            vec![surface(&lower), surface(&upper)],
+            ContactSettings {
+                mode: ContactMode::Frictionless,
+                penalty: 100.0,
+                search_distance: 0.6,
+                curvature_stiffness: true,
+                touch_stiffness_cap: f64::INFINITY,
+            },
+        )
+        .unwrap();
+        let stiffness = 7.0;
+        contact.set_touch_force(Some(stiffness));
+        let x: Vec<f64> = nodes.iter().flatten().copied().collect();
+        contact.pair(&x);
+        let at_pairing = contact.evaluate(&x, false);
+        assert!(at_pairing.terms.len() >= 4);
+        assert!(
+            at_pairing
+                .terms
+                .iter()
+                .all(|t| t.pressure == 0.0 && t.force.iter().all(|f| *f == 0.0))
+        );
+        // The upper patch (nodes 16..32) moved down by 0.004 and sideways:
+        // still apart, each node closer by about 0.004.
+        let mut moved = nodes.clone();
+        for p in &mut moved[16..] {
+            p[0] += 0.002;
+            p[2] -= 0.004;
+        }
+        let xm: Vec<f64> = moved.iter().flatten().copied().collect();
+        let eval = contact.evaluate(&xm, true);
+        for t in &eval.terms {
+            assert_eq!(t.pressure, 0.0);
+            let change = t.penetration - at_pairing_reading(&at_pairing, t);
+            assert!(change > 0.003 && change < 0.005, "{change}");
+            // The slave's force is the spring's along -n, |dp/ds| = 1.
+            let slave = (t.force[0].powi(2) + t.force[1].powi(2) + t.force[2].powi(2)).sqrt();
+            let area = 0.5 * contact.surfaces()[t.slave.0].areas[t.slave.1];
+            assert!(
+                (slave - area * stiffness * change).abs() < 1e-12,
+                "{slave} against {}",
+                area * stiffness * change
+            );
+        }
+        check_touch_tangent(&contact, &xm);
+    }
+}
+
+/// The penetration the term of the same node and facet read at pairing.
+fn at_pairing_reading(
+    at_pairing: &tidens_contact::ContactEvaluation,
+    t: &tidens_contact::ContactTerm,
+) -> f64 {
+    at_pairing
+        .terms
+        .iter()
+        .find(|a| a.slave == t.slave && a.master == t.master)
+        .map(|a| a.penetration)
+        .unwrap()
+}
+
+/// The assembled tangent of every term against central differences of the
+/// total contact force at `x`.
+fn check_touch_tangent(contact: &ParticleContact, x: &[f64]) {
+    let eval = contact.evaluate(x, true);
+    let n = x.len();
+    let mut k = vec![0.0; n * n];
+    for t in &eval.terms {
+        let m = t.dofs.len();
+        for p in 0..m {
+            for q in 0..m {
+                k[t.dofs[p] * n + t.dofs[q]] += t.tangent[p * m + q];
+            }
+        }
+    }
+    let scale = k.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    let h = 1e-7;
+    for j in 0..n {
+        let (mut xp, mut xm) = (x.to_vec(), x.to_vec());
+        xp[j] += h;
+        xm[j] -= h;
+        let (fp, fm) = (total_force(contact, &xp), total_force(contact, &xm));
+        for i in 0..n {
+            let fd = (fp[i] - fm[i]) / (2.0 * h);
+            let an = k[i * n + j];
+            assert!(
+                (fd - an).abs() < 1e-5 * scale,
+                "K[{i},{j}]: analytic {an}, fd {fd}"
+            );
+        }
+    }
+}

@@ -285,6 +285,15 @@ impl Simulation {
             } else {
                 0.0
             };
+            // Nothing holds a particle of a periodic cell off a contact
+            // that has not closed yet: the touch stiffness is a force too,
+            // so that the cell carries the load before its contacts close
+            // (the step's spring moves a node a fiftieth of an element
+            // against the stress the cell feels now).
+            if let Some(c) = self.contact.as_mut() {
+                let h = c.settings().search_distance;
+                c.set_touch_force(Some(crate::simulation::TOUCH_STIFFNESS_CAP * stress / h));
+            }
         }
         if debug_enabled() {
             eprintln!("  step from t = {:.6e} s, dt = {dt:.4e} s", self.state.time);

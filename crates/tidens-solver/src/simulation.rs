@@ -88,7 +88,7 @@ pub struct Simulation {
 /// The cap of the particle contacts' touch stiffness, in units of the
 /// stress the cell feels over the mean surface element size (f sigma / h)
 /// (`ContactSettings::touch_stiffness_cap`).
-const TOUCH_STIFFNESS_CAP: f64 = 50.0;
+pub(crate) const TOUCH_STIFFNESS_CAP: f64 = 50.0;
 
 /// The largest contact penalty, in units of f sigma / h: the penalty factor
 /// times E / h unless that is larger (E/sigma above 1e5 at the default
