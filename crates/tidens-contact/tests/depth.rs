@@ -10,20 +10,14 @@
 //! top one of whose two triangles faced down. A node outside the particle's
 //! bounding box is outside whatever its faces say.
 
-use tidens_contact::{ContactMode, ContactSettings, ContactSurface, ParticleContact};
+#[path = "support/frictionless.rs"]
+mod support;
+
+use support::frictionless;
+use tidens_contact::{ContactSurface, ParticleContact};
 
 fn contact(surfaces: Vec<ContactSurface>) -> ParticleContact {
-    ParticleContact::new(
-        surfaces,
-        ContactSettings {
-            mode: ContactMode::Frictionless,
-            penalty: 100.0,
-            search_distance: 0.1,
-            curvature_stiffness: false,
-            touch_stiffness_cap: f64::INFINITY,
-        },
-    )
-    .unwrap()
+    frictionless(surfaces, 0.1)
 }
 
 /// A master: the tetrahedron of corners 0, x, y and z of the unit box,

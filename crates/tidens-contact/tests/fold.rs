@@ -5,7 +5,11 @@
 //! halves; its link's plane alone, extended past the fold under the other
 //! half, read it shallower.
 
-use tidens_contact::{ContactMode, ContactSettings, ContactSurface, ParticleContact};
+#[path = "support/frictionless.rs"]
+mod support;
+
+use support::frictionless;
+use tidens_contact::{ContactSurface, ParticleContact};
 
 /// Rise of each half's off-diagonal corner above the diagonal [mm].
 const RISE: f64 = 0.1;
@@ -39,17 +43,7 @@ fn fold(rise: f64, centre: [f64; 3]) -> (Vec<[f64; 3]>, Vec<ContactSurface>) {
 }
 
 fn contact(surfaces: Vec<ContactSurface>) -> ParticleContact {
-    ParticleContact::new(
-        surfaces,
-        ContactSettings {
-            mode: ContactMode::Frictionless,
-            penalty: 100.0,
-            search_distance: 0.1,
-            curvature_stiffness: false,
-            touch_stiffness_cap: f64::INFINITY,
-        },
-    )
-    .unwrap()
+    frictionless(surfaces, 0.1)
 }
 
 /// Distance from `p` to the triangle `t` (brute force: its plane, edges

@@ -3,7 +3,11 @@
 //! that slid off its facet is paired afresh; near a slender tip a node is
 //! measured on its own side of it, and beyond the tip on no face.
 
-use tidens_contact::{ContactMode, ContactSettings, ContactSurface, ParticleContact};
+#[path = "support/frictionless.rs"]
+mod support;
+
+use support::frictionless;
+use tidens_contact::{ContactSurface, ParticleContact};
 
 /// Penetration of the pocket's slave nodes into each wall [mm].
 const DEPTH: f64 = 0.01;
@@ -59,17 +63,7 @@ fn contact(surfaces: Vec<ContactSurface>) -> ParticleContact {
 }
 
 fn contact_within(surfaces: Vec<ContactSurface>, search_distance: f64) -> ParticleContact {
-    ParticleContact::new(
-        surfaces,
-        ContactSettings {
-            mode: ContactMode::Frictionless,
-            penalty: 100.0,
-            search_distance,
-            curvature_stiffness: false,
-            touch_stiffness_cap: f64::INFINITY,
-        },
-    )
-    .unwrap()
+    frictionless(surfaces, search_distance)
 }
 
 /// Adds a slave quad of half-width 0.01 facing down with its centre at
