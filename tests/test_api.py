@@ -129,10 +129,13 @@ def test_tmp_formula_agrees_with_the_preset() -> None:
 
 def test_solves_release_the_gil(quick_case: td.Case) -> None:
     # One native call runs the whole solve in a second thread; this thread
-    # ticks meanwhile. Had the solver held the GIL for a step, no tick could
-    # happen during it: the longest gap between ticks would be at least a
-    # step's duration. Released, the gaps are the interpreter's hand-over
-    # time (the switch interval, shortened here), far shorter than a step.
+    # ticks meanwhile. Had the solver held the GIL during its steps, no tick
+    # could happen during one: the gaps between ticks of a step's duration
+    # or longer would add up to about the whole solve. Released, the gaps
+    # are the interpreter's hand-over time (the switch interval, shortened
+    # here), far shorter than a step, but for the odd one where the system
+    # took the core away (on a loaded 2-core machine, one gap of 0.044 s
+    # against steps of 0.087 s): those add up to a small share.
     sim = dataclasses.replace(quick_case, solver=td.SolverSettings(mesh_level=2, tolerance=0.05)).simulation(until_density=0.58)
     old_interval = sys.getswitchinterval()
     sys.setswitchinterval(1e-4)
@@ -150,7 +153,8 @@ def test_solves_release_the_gil(quick_case: td.Case) -> None:
     gaps = np.diff(ticks)
     assert sim.status == "reached_density" and steps > 10
     step_time = solve / steps
-    assert gaps.max() < 0.5 * step_time, (gaps.max(), step_time)
+    long_gaps = gaps[gaps > 0.5 * step_time]
+    assert long_gaps.sum() < 0.2 * solve, (long_gaps, step_time, solve)
     assert len(ticks) > 100 * steps
 
 
