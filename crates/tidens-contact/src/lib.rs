@@ -494,30 +494,8 @@ impl ParticleContact {
     /// With a touch force ([`ParticleContact::set_touch_force`]) each
     /// link's reference is the node's penetration now.
     pub fn pair(&mut self, x: &[f64]) {
-        self.drop_left(x);
+        self.drop_left(x, true);
         self.pair_unpaired(x);
-        if self.touch_force.is_none() {
-            return;
-        }
-        let references: Vec<Vec<Vec<f64>>> = self
-            .pairing
-            .iter()
-            .enumerate()
-            .map(|(s, nodes)| {
-                nodes
-                    .iter()
-                    .enumerate()
-                    .map(|(k, links)| links.iter().map(|l| self.measure(x, s, k, l).1).collect())
-                    .collect()
-            })
-            .collect();
-        for (nodes, refs) in self.pairing.iter_mut().zip(references) {
-            for (links, r) in nodes.iter_mut().zip(refs) {
-                for (l, v) in links.iter_mut().zip(r) {
-                    l.reference = v;
-                }
-            }
-        }
     }
 
     /// Makes the touch stiffness of unpressed nodes a force too: a spring
@@ -553,7 +531,7 @@ impl ParticleContact {
     /// follows would start from that state with the true penetration.
     pub fn repair(&mut self, x: &[f64]) -> usize {
         let before = self.pairing.clone();
-        self.drop_left(x);
+        self.drop_left(x, false);
         self.pair_unpaired(x);
         // Only a link to another facet is new: a node near a convex edge can
         // have its nearest facet's patch project it beyond the margin, and
@@ -616,13 +594,21 @@ impl ParticleContact {
 
     /// Drops the links whose node has left its facet grown by
     /// [`KEEP_FACET_MARGIN`] or gone beyond the search distance; the others
-    /// start their projection where the node projects now.
-    fn drop_left(&mut self, x: &[f64]) {
+    /// start their projection where the node projects now, and with a
+    /// touch force and `new_step` take the node's penetration now as their
+    /// reference (new links do in [`ParticleContact::pair_unpaired`]).
+    fn drop_left(&mut self, x: &[f64], new_step: bool) {
+        let reset = new_step && self.touch_force.is_some();
         let keep = |s: usize, k: usize, l: &Link| {
             let (xi, penetration) = self.measure(x, s, k, l);
             let kept = facet::outside(self.surfaces[l.master].kind, xi) <= KEEP_FACET_MARGIN
                 && penetration > -self.settings.search_distance;
-            kept.then_some(Link { start: xi, ..*l })
+            let reference = if reset { penetration } else { l.reference };
+            kept.then_some(Link {
+                start: xi,
+                reference,
+                ..*l
+            })
         };
         let pairing: Vec<Vec<NodePairing>> = self
             .pairing
