@@ -177,6 +177,9 @@ impl Assembler {
                 self.system.add_block(&t.dofs, &t.tangent, map)
             };
         }
+        for (dofs, tangent) in &eval.rotation_tangents {
+            outside += self.system.add_block(dofs, tangent, map);
+        }
         for (d, &k) in eval.drag_diagonal.iter().enumerate() {
             if k != 0.0 && map[d] == d {
                 self.system.add(d, d, k);
@@ -220,6 +223,21 @@ impl Assembler {
         self.pattern_rebuilds += 1;
     }
 
+    /// Adds dense couplings among each set of `dofs` to the pattern (the
+    /// particles' rotation frames of a periodic cell).
+    pub fn add_couplings(
+        &mut self,
+        sets: impl IntoIterator<Item = Vec<usize>>,
+        constraints: &Constraints,
+    ) {
+        for dofs in sets {
+            let mut clique = constraints.clique(&dofs);
+            clique.sort_unstable();
+            self.contact_cliques.insert(clique);
+        }
+        self.rebuild();
+    }
+
     /// `K v` over the body dofs, for `v` given by its non-zero entries, from
     /// the element tangents last gathered (by [`Assembler::assemble`] of
     /// `eval`) and the contact tangents of `eval`.
@@ -236,15 +254,23 @@ impl Assembler {
                 out[row_idx[k]] += self.dof_values[k] * x;
             }
         }
-        for t in &eval.contact.terms {
-            if t.dofs.iter().all(|&d| v[d] == 0.0) {
+        let blocks = eval
+            .contact
+            .terms
+            .iter()
+            .map(|t| (t.dofs.as_slice(), t.tangent.as_slice()))
+            .chain(
+                eval.rotation_tangents
+                    .iter()
+                    .map(|(d, k)| (d.as_slice(), k.as_slice())),
+            );
+        for (dofs, tangent) in blocks {
+            if dofs.iter().all(|&d| v[d] == 0.0) {
                 continue;
             }
-            let m = t.dofs.len();
-            for (p, &dp) in t.dofs.iter().enumerate() {
-                out[dp] += (0..m)
-                    .map(|q| t.tangent[p * m + q] * v[t.dofs[q]])
-                    .sum::<f64>();
+            let m = dofs.len();
+            for (p, &dp) in dofs.iter().enumerate() {
+                out[dp] += (0..m).map(|q| tangent[p * m + q] * v[dofs[q]]).sum::<f64>();
             }
         }
         out

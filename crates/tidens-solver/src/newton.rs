@@ -285,6 +285,13 @@ impl Simulation {
             } else {
                 0.0
             };
+            let nodes = self.body.nodes();
+            for frame in &mut st.frames {
+                let reference = &st.reference;
+                frame.place(|n| {
+                    nalgebra::Vector3::from_fn(|i, _| nodes[n][i] + reference[3 * n + i])
+                });
+            }
             // Nothing holds a particle of a periodic cell off a contact
             // that has not closed yet: the touch stiffness is a force too,
             // so that the cell carries the load before its contacts close

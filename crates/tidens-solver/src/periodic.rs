@@ -52,8 +52,20 @@
 //! it to rho = 0.7 in 119 steps and 631 Newton iterations (7 failed
 //! attempts), but t(0.7) = 89.8 s against the octant's 82.0, and the drag
 //! carried up to 1.03 times the load: that drag holds the core to the
-//! cell's affine motion, which a core does not follow. What the numbers
-//! point to is a hold on each particle's rigid rotation alone.
+//! cell's affine motion, which a core does not follow.
+//!
+//! So each particle's rigid rotation alone is held, by a drag on the
+//! rotation fitted over six nodes of its core
+//! (`crate::evaluation::RotationFrame`), charged as a drag of the load's
+//! share `beta_rot = 1` would charge it on the whole particle. The aligned
+//! sphere then reaches rho = 0.7 in 108 steps and 660 Newton iterations
+//! (4 failed attempts), t(0.6) = 13.61 s and t(0.7) = 81.7 s against the
+//! octant's 13.64 s and 82.0 s; the turned sphere in 142 steps and 1214
+//! Newton iterations (t(0.6) = 12.71 s, t(0.7) = 79.8 s: its mesh is not
+//! the octant's). `beta_rot` = 0.1 failed at rho = 0.567 (t = 3.8 s, steps
+//! cut to 1e-14 s, the residual stalled at 1.2 times the tolerance), and
+//! so did 10, at t = 35.4 s (rho about 0.645); why the stronger hold fails is
+//! not known yet.
 
 use crate::error::SolverError;
 use crate::scene::{MeshOptions, Particle, Scene};

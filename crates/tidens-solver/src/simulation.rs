@@ -182,13 +182,68 @@ fn stabilisation(scene: &Scene, constraints: &Constraints) -> crate::evaluation:
             }
         })
         .collect();
+    let frames = scene
+        .particles
+        .iter()
+        .map(|p| rotation_frame(scene.nodes(), p.nodes, &volume, &map))
+        .collect();
     crate::evaluation::Stabilisation {
         volume,
         height_fraction,
         scale: crate::evaluation::STABILISATION / (scene.radius * scene.radius),
         stiffness: 0.0,
         reference: vec![0.0; n_dof],
+        frames,
+        rotation_factor: crate::evaluation::ROTATION_HOLD / crate::evaluation::STABILISATION,
     }
+}
+
+/// The rotation frame of the particle of nodes `first..first + count`:
+/// the free nodes nearest to the points half its radius from its centroid
+/// along the three axes, both ways (see
+/// [`crate::evaluation::RotationFrame`]); `volume` is each dof's volume
+/// share, `map` the equation map (a node is free when its dofs map to
+/// themselves).
+fn rotation_frame(
+    nodes: &[[f64; 3]],
+    (first, count): (usize, usize),
+    volume: &[f64],
+    map: &[usize],
+) -> crate::evaluation::RotationFrame {
+    use nalgebra::Vector3;
+    let at = |n: usize| Vector3::from(nodes[n]);
+    let own = first..first + count;
+    let centre = own.clone().map(at).sum::<Vector3<f64>>() / count as f64;
+    let radius = own
+        .clone()
+        .map(|n| (at(n) - centre).norm())
+        .fold(0.0, f64::max);
+    let free = |n: &usize| (0..3).all(|i| map[3 * n + i] == 3 * n + i);
+    let mut chosen: Vec<usize> = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0, 1.0] {
+            let target = centre + Vector3::ith(axis, sign * 0.5 * radius);
+            let best = own
+                .clone()
+                .filter(|n| free(n) && !chosen.contains(n))
+                .min_by(|&a, &b| (at(a) - target).norm().total_cmp(&(at(b) - target).norm()));
+            chosen.extend(best);
+        }
+    }
+    let particle = crate::evaluation::moment(
+        &own.clone()
+            .map(|n| (at(n) - centre) * volume[3 * n].sqrt())
+            .collect::<Vec<_>>(),
+    );
+    let mut frame = crate::evaluation::RotationFrame {
+        nodes: chosen,
+        weight: 0.0,
+        arms: Vec::new(),
+        j_inv: nalgebra::Matrix3::zeros(),
+    };
+    frame.place(at);
+    frame.weight = particle.trace() / crate::evaluation::moment(&frame.arms).trace();
+    frame
 }
 
 /// A periodic cell's constraints: its images follow their particles, and
@@ -287,6 +342,10 @@ impl Simulation {
             .periodic
             .as_ref()
             .map(|_| stabilisation(scene, &constraints));
+        let mut assembler = assembler;
+        if let Some(st) = &stabilisation {
+            assembler.add_couplings(st.frames.iter().map(|f| f.dofs()), &constraints);
+        }
         let n_dof = constraints.dof_count();
         let eval = body.evaluate(&vec![0.0; n_dof], 0.0, false)?;
         let volume = eval.volume();
