@@ -153,5 +153,6 @@ def test_tied_planes_help_says_it_is_a_sensitivity_option(capsys: pytest.Capture
     text = " ".join(capsys.readouterr().out.split())
     tied = text[text.rindex("--tied-planes"):]  # its description, after the usage line
     assert "sensitivity option, not the default" in tied[:200]
-    for option in ("--cell {sc,bcc,fcc,sc2}", "--cell-file PATH", "--size-ratio", "--contact {frictionless,tied}"):
+    for option in ("--cell {sc,bcc,fcc,sc2,random}", "--periodic", "--particles", "--packing-seed", "--cell-file PATH",
+                   "--size-ratio", "--contact {frictionless,tied}"):
         assert option in text

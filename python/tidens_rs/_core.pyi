@@ -39,6 +39,7 @@ ELEMENTS: list[str]
 LEVEL_DIVISIONS: dict[int, int]
 
 _Octant: TypeAlias = tuple[tuple[bool, bool, bool], float, float]
+_Particle: TypeAlias = tuple[tuple[float, float, float], float, float, tuple[float, float, float]]
 
 class TidensError(Exception):
     """Base class of the errors raised by the solver."""
@@ -163,7 +164,8 @@ class Packing:
 
 @final
 class Cell:
-    """A box [0,Lx]x[0,Ly]x[0,Lz] of mirror planes with particle octants at its corners."""
+    """A box [0,Lx]x[0,Ly]x[0,Lz] of mirror planes with particle octants at its
+    corners, or (Cell.periodic) whole particles in a box periodic along x, y and z."""
 
     def __new__(
         cls, name: str, lengths_mm: tuple[float, float, float], octants: list[_Octant]
@@ -182,8 +184,15 @@ class Cell:
     def lengths_mm(self) -> tuple[float, float, float]: ...
     @property
     def rho0(self) -> float: ...
+    @staticmethod
+    def periodic(name: str, lengths_mm: tuple[float, float, float], particles: list[_Particle]) -> Cell:
+        """Whole particles (centre_mm, a_mm, c_mm, axis) in a periodic box (ValueError naming the field)."""
+    @property
+    def is_periodic(self) -> bool: ...
     @property
     def octants(self) -> list[_Octant]: ...
+    @property
+    def particles(self) -> list[_Particle]: ...
 
 @final
 class Simulation:

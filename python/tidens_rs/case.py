@@ -70,7 +70,10 @@ class SolverSettings:
         the exact volume of the spheroid, and the curve starts at the
         packing's exact rho0 (the default). False puts the surface nodes on
         the spheroid: the flat facets between them leave each particle a
-        little short of its volume (0.75 % at level 2).
+        little short of its volume (0.75 % at level 2). Periodic cells
+        (whole particles) are always meshed so, whatever this says: their
+        particles touch, and the exact volume's outward bulge would make
+        them overlap.
     element
         ``hex8``: the 8-node mean-dilatation hexahedron (default); ``tet10``:
         the 10-node tetrahedron with one pressure, 6 per hexahedron of the
@@ -222,6 +225,8 @@ class Case:
             "tied_planes": c.flag("tied_planes", self.tied_planes),
         }
         _core.check_parameters(**fixed, material=self.material)
+        if self.cell.is_periodic:
+            _check_load_bearing(self.cell)
         for name, value in fixed.items():
             object.__setattr__(self, name, value)
 
@@ -633,6 +638,24 @@ class Case:
         )
         return _estimate_with(result, other, error)
 
+
+
+def _check_load_bearing(cell: Cell) -> None:
+    """A periodic cell must hold its load by particles in contact: nothing
+    else bounds it. Refused when no particle has the 4 contacts that hold a
+    frictionless sphere (rattlers removed round after round): such a cell
+    would be carried by the solver's stabilising drag alone."""
+    from . import packing
+
+    pack = cells.to_packing(cell)
+    if packing.coordination_number(pack, without_rattlers=True) > 0.0:
+        return
+    z = packing.coordination_number(pack)
+    raise ValueError(
+        f"cell {cell.name!r}: its particles form no network that can carry the load (coordination number "
+        f"{z:.2f}, none held by 4 contacts): a periodic cell must start jammed (for a random packing, leave rho0 "
+        "out or give one at or above the density where it jams, about 0.64 for one size)"
+    )
 
 
 def _out_dir(out_dir: Any) -> Path | None:

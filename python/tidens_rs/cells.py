@@ -6,6 +6,13 @@ The four packings of the paper are presets (:func:`sc`, :func:`bcc`,
 :func:`fcc`, :func:`sc2`); any other arrangement of octants is a
 :func:`custom` cell, in code or from a cell file (:func:`from_file`).
 
+Periodic cells hold whole particles in a box periodic along x, y and z
+(:func:`periodic`): a random packing (:func:`random`, :func:`from_packing`)
+or a lattice of whole particles (:func:`as_periodic` of a preset). Nothing
+bounds them: the box's height shortens as the piston moves, its width and
+depth stay (the die's uniaxial strain), and particles touch the periodic
+images of the others across the box faces.
+
 The creep law has no length scale, so the densification curve does not
 depend on the particle radius; it only sets the units of the fields.
 
@@ -26,6 +33,19 @@ JSON or TOML (by the file's suffix, ``.json`` or ``.toml``), one cell::
     corner = "111"
     a = 0.05
     c = 0.05
+
+A periodic cell lists whole particles instead of octants (``centre`` in the
+box [mm], semi-axes ``a`` across and ``c`` along ``axis``)::
+
+    name = "random-16"
+    lengths_mm = [0.2, 0.2, 0.2]
+    periodic = true
+
+    [[particles]]
+    centre = [0.05, 0.05, 0.05]
+    a = 0.05
+    c = 0.05
+    axis = [0.0, 0.0, 1.0]
 
 or the same as JSON: ``{"name": ..., "lengths_mm": [...], "octants": [{"corner":
 [false, false, false], "a": 0.05, "c": 0.05}, ...]}``. Any other key is an
@@ -53,7 +73,7 @@ from typing import Any
 
 import numpy as np
 
-from ._core import DEFAULT_SIZE_RATIO, Cell
+from ._core import DEFAULT_SIZE_RATIO, Cell, Packing
 
 DEFAULT_RADIUS_MM = 0.05
 CELL_NAMES = ("sc", "bcc", "fcc", "sc2")
@@ -62,8 +82,12 @@ Corner = tuple[bool, bool, bool]
 Octant = tuple[Corner, float, float]
 """One particle piece: (corner, a_mm, c_mm), see :func:`custom`."""
 
-_FILE_KEYS = ("name", "lengths_mm", "octants")
+_FILE_KEYS = ("name", "lengths_mm", "octants", "periodic", "particles")
 _OCTANT_KEYS = ("corner", "a", "c")
+_PARTICLE_KEYS = ("centre", "a", "c", "axis")
+
+Particle = tuple[tuple[float, float, float], float, float, tuple[float, float, float]]
+"""One whole particle of a periodic cell: (centre_mm, a_mm, c_mm, axis), see :func:`periodic`."""
 
 
 def sc(radius_mm: float = DEFAULT_RADIUS_MM, aspect_ratio: float = 1.0) -> Cell:
@@ -132,11 +156,126 @@ def custom(name: str, lengths_mm: Sequence[float], octants: Sequence[Sequence[An
     return Cell(name, (lengths[0], lengths[1], lengths[2]), pieces)
 
 
+def periodic(particles: Sequence[Sequence[Any]], lengths_mm: Sequence[float], name: str = "periodic") -> Cell:
+    """A periodic cell of whole particles (see the module docstring).
+
+    ``lengths_mm`` = (Lx, Ly, Lz) [mm], z the pressing direction. Each
+    particle is ``(centre, a, c, axis)``: its centre in the box [0, L) [mm],
+    its semi-axes [mm] (``a`` across, ``c`` along ``axis``, c/a in [0.2, 5])
+    and its symmetry axis (any non-zero vector). Particles may reach across
+    the box faces. Raises ValueError naming the bad field (e.g.
+    ``particles[3].centre[0]``); overlaps are found by the simulation
+    (UnsupportedError). Periodic cells are meshed with hex8 elements.
+    """
+    if not isinstance(name, str):
+        raise ValueError(f"name = {name!r}: must be a string")
+    lengths = _numbers("lengths_mm", lengths_mm, 3, "three box edge lengths Lx, Ly, Lz [mm]")
+    items = _plain(particles)
+    if isinstance(items, (str, bytes)) or not isinstance(items, Sequence):
+        raise ValueError(f"particles = {items!r}: must be a list of (centre, a, c, axis)")
+    pieces: list[Particle] = []
+    for k, particle in enumerate(items):
+        if isinstance(particle, (str, bytes)) or not isinstance(particle, Sequence) or len(particle) != 4:
+            raise ValueError(f"particles[{k}] = {particle!r}: must be (centre, a, c, axis)")
+        centre, a, c, axis = (_plain(x) for x in particle)
+        x = _numbers(f"particles[{k}].centre", centre, 3, "the centre (x, y, z) [mm]")
+        n = _numbers(f"particles[{k}].axis", axis, 3, "the symmetry axis (x, y, z)")
+        pieces.append(
+            ((x[0], x[1], x[2]), _number(f"particles[{k}].a", a), _number(f"particles[{k}].c", c), (n[0], n[1], n[2]))
+        )
+    return Cell.periodic(name, (lengths[0], lengths[1], lengths[2]), pieces)
+
+
+def _wrap(x: float, length: float) -> float:
+    """x moved by whole periods into [0, length)."""
+    w = x % length
+    return 0.0 if w >= length else w
+
+
+def from_packing(packing: Packing, name: str = "random") -> Cell:
+    """The periodic cell of a packing (``Packing.generate`` or a packing
+    file, see :mod:`tidens_rs.packing`) whose boundary is periodic; a die
+    packing (walls at z = 0 and Lz) is refused: the solver presses periodic
+    cells only."""
+    if not isinstance(packing, Packing):
+        raise TypeError(f"packing = {packing!r}: must be a Packing, not {type(packing).__name__}")
+    if packing.boundary != "periodic":
+        raise ValueError(
+            f"packing boundary = {packing.boundary!r}: must be 'periodic' (the solver presses cells periodic "
+            "along x, y and z; generate the packing with boundary='periodic')"
+        )
+    centres = packing.centres_mm
+    lengths = packing.lengths_mm
+    wrapped = [[_wrap(float(x), lengths[i]) for i, x in enumerate(c)] for c in centres]
+    parts = [
+        (tuple(c), float(ac[0]), float(ac[1]), tuple(float(v) for v in ax))
+        for c, ac, ax in zip(wrapped, packing.semi_axes_mm, packing.axes)
+    ]
+    return periodic(parts, lengths, name)
+
+
+def random(
+    particles: int,
+    *,
+    seed: int = 0,
+    rho0: float | None = None,
+    radius_mm: float = DEFAULT_RADIUS_MM,
+    aspect_ratio: float = 1.0,
+    size_ratio: float | None = None,
+    small_fraction: float = 0.5,
+) -> Cell:
+    """A random jammed packing of ``particles`` spheres (or spheroids of
+    ``aspect_ratio`` c/a, each along a random axis) in a cube periodic along
+    x, y and z, as a periodic cell named ``random``: the particles grow
+    toward ``rho0`` and stop where they jam (None: as far as they go, the
+    jammed density, about 0.64 for one size). A packing that reaches
+    ``rho0`` unjammed holds no load (``Case`` refuses it). ``radius_mm`` is
+    the mean volume-equivalent radius; ``size_ratio`` (with
+    ``small_fraction``, the small particles' share of the number) makes it
+    bimodal. The same arguments give the same packing. See
+    ``Packing.generate`` for the ranges (ValueError naming the argument)."""
+    pack = Packing.generate(
+        particles,
+        rho0=0.74 if rho0 is None else rho0,
+        jam=True,
+        mean_radius_mm=radius_mm,
+        aspect_ratio=aspect_ratio,
+        size_ratio=size_ratio,
+        small_fraction=small_fraction,
+        boundary="periodic",
+        seed=seed,
+    )
+    return from_packing(pack, "random")
+
+
+def as_periodic(cell: Cell) -> Cell:
+    """The lattice of a cell of octants as whole particles in a periodic
+    box: the cell mirrored about its low faces, twice its size along each
+    axis, each octant a whole particle at its corner (the sc cell: one
+    sphere in a cube of edge 2R; bcc two, fcc four, sc2 eight)."""
+    if not isinstance(cell, Cell):
+        raise TypeError(f"cell = {cell!r}: must be a Cell, not {type(cell).__name__}")
+    if cell.is_periodic:
+        return cell
+    lx, ly, lz = cell.lengths_mm
+    parts = [
+        ((lx if hx else 0.0, ly if hy else 0.0, lz if hz else 0.0), a, c, (0.0, 0.0, 1.0))
+        for (hx, hy, hz), a, c in cell.octants
+    ]
+    return periodic(parts, (2 * lx, 2 * ly, 2 * lz), cell.name)
+
+
 def from_dict(data: Mapping[str, Any], default_name: str = "custom") -> Cell:
     """A cell from the parsed content of a cell file (see the module docstring)."""
     if not isinstance(data, Mapping):
         raise ValueError(f"a cell must be a table (JSON object) with keys {', '.join(_FILE_KEYS)}")
     _no_unknown_keys("", data, _FILE_KEYS)
+    if data.get("periodic", False) is not False:
+        if data["periodic"] is not True:
+            raise ValueError(f"periodic = {data['periodic']!r}: must be true or false")
+        return _periodic_from_dict(data, default_name)
+    if "particles" in data:
+        raise ValueError("particles: a cell of whole particles needs periodic = true (otherwise it lists octants)")
     for key in ("lengths_mm", "octants"):
         if key not in data:
             raise ValueError(f"{key}: missing")
@@ -194,8 +333,50 @@ def from_file(path: str | Path) -> Cell:
         raise ValueError(f"cell file {p}: {e}") from e
 
 
+def _periodic_from_dict(data: Mapping[str, Any], default_name: str) -> Cell:
+    for key in ("lengths_mm", "particles"):
+        if key not in data:
+            raise ValueError(f"{key}: missing")
+    if "octants" in data:
+        raise ValueError("octants: a periodic cell lists particles, not octants")
+    items = data["particles"]
+    if not isinstance(items, list) or not items:
+        raise ValueError(f"particles = {items!r}: must be a non-empty list of tables with keys {', '.join(_PARTICLE_KEYS)}")
+    parts = []
+    for k, p in enumerate(items):
+        where = f"particles[{k}]"
+        if not isinstance(p, Mapping):
+            raise ValueError(f"{where} = {p!r}: must be a table with keys {', '.join(_PARTICLE_KEYS)}")
+        _no_unknown_keys(where + ".", p, _PARTICLE_KEYS)
+        missing = [key for key in _PARTICLE_KEYS if key not in p]
+        if missing:
+            raise ValueError(f"{where}.{missing[0]}: missing")
+        parts.append((p["centre"], p["a"], p["c"], p["axis"]))
+    return periodic(parts, data["lengths_mm"], data.get("name", default_name))
+
+
+def to_packing(cell: Cell) -> Packing:
+    """The particles of a periodic cell as a :class:`Packing` (for its
+    contacts and coordination number)."""
+    if not cell.is_periodic:
+        raise ValueError(f"cell {cell.name!r}: a cell of octants, not whole particles (see as_periodic)")
+    lines = [
+        " ".join(repr(float(v)) for v in (*centre, a, c, *axis)) for centre, a, c, axis in cell.particles
+    ]
+    return Packing.from_text("\n".join(lines) + "\n", cell.lengths_mm, "periodic")
+
+
 def to_dict(cell: Cell) -> dict[str, Any]:
     """The cell in the cell-file schema (``from_dict(to_dict(c))`` rebuilds it)."""
+    if cell.is_periodic:
+        return {
+            "name": cell.name,
+            "lengths_mm": list(cell.lengths_mm),
+            "periodic": True,
+            "particles": [
+                {"centre": list(centre), "a": a, "c": c, "axis": list(axis)} for centre, a, c, axis in cell.particles
+            ],
+        }
     return {
         "name": cell.name,
         "lengths_mm": list(cell.lengths_mm),
@@ -203,15 +384,32 @@ def to_dict(cell: Cell) -> dict[str, Any]:
     }
 
 
+def _semi_axes(cell: Cell) -> list[tuple[float, float]]:
+    if cell.is_periodic:
+        return [(a, c) for _, a, c, _ in cell.particles]
+    return [(a, c) for _, a, c in cell.octants]
+
+
+def largest_radius_of(cell: Cell) -> float:
+    """The largest semi-axis of any particle [mm] (the R of tolerances)."""
+    return max(max(a, c) for a, c in _semi_axes(cell))
+
+
+def has_particle_contact(cell: Cell) -> bool:
+    """True when particles touch particles: a cell of more than one octant,
+    or any periodic cell (its particles touch their images)."""
+    return cell.is_periodic or len(cell.octants) > 1
+
+
 def size_ratio_of(cell: Cell) -> float:
     """Largest over smallest particle semi-axis a [-] (1 for one size)."""
-    sizes = [a for _, a, _ in cell.octants]
+    sizes = [a for a, _ in _semi_axes(cell)]
     return max(sizes) / min(sizes)
 
 
 def aspect_ratio_of(cell: Cell) -> float | None:
     """The particles' common c/a, None when they differ."""
-    ratios = [c / a for _, a, c in cell.octants]
+    ratios = [c / a for a, c in _semi_axes(cell)]
     if all(math.isclose(r, ratios[0], rel_tol=1e-12) for r in ratios):
         return ratios[0]
     return None

@@ -114,11 +114,16 @@ def _float_list(text: str) -> list[float]:
 
 def _add_run_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("cell")
-    g.add_argument("--cell", choices=cells.CELL_NAMES, help="packing (default sc): sc, bcc, fcc, or sc2 (rock salt of two sizes)")
+    g.add_argument("--cell", choices=(*cells.CELL_NAMES, "random"), help="packing (default sc): sc, bcc, fcc, sc2 (rock salt of two sizes), or random (a random jammed packing of whole particles in a periodic cube, see --particles)")
+    g.add_argument("--periodic", action="store_true", help="the lattice of --cell as whole particles in a periodic box twice the cell's size (sc: one sphere; bcc two, fcc four, sc2 eight), instead of the cell of octants between mirror planes")
+    g.add_argument("--particles", type=int, help="--cell random: number of particles, in [1, 10000] (default 16)")
+    g.add_argument("--packing-seed", type=int, help="--cell random: seed of the packing, >= 0 (default 0): the same options and seed give the same packing")
+    g.add_argument("--rho0", type=float, help="--cell random: grow the packing toward this relative density and stop where it jams below it (default: the jammed density, about 0.64 for one size)")
+    g.add_argument("--small-fraction", type=float, help="--cell random with --size-ratio: number fraction of the small particles, in [0, 1] (default 0.5)")
     g.add_argument("--cell-file", type=Path, metavar="PATH", help="a cell described in a JSON or TOML file, instead of --cell (schema: python -c 'import tidens_rs.cells as c; help(c)')")
     g.add_argument("--aspect-ratio", type=float, help="spheroid c/a, c along the load (default 1)")
     g.add_argument("--radius", type=float, help="particle radius a [mm], the large one for sc2 (default 0.05; the curve does not depend on it)")
-    g.add_argument("--size-ratio", type=float, help=f"sc2 only: radius of the large particles over the small ones, in [1, 1 + sqrt 2 = 2.414] (default {cells.DEFAULT_SIZE_RATIO:g})")
+    g.add_argument("--size-ratio", type=float, help=f"sc2 and random only: radius of the large particles over the small ones, sc2 in [1, 1 + sqrt 2 = 2.414] (default {cells.DEFAULT_SIZE_RATIO:g}); random: a bimodal packing (default one size)")
     g = p.add_argument_group("contact")
     g.add_argument("--contact", choices=CONTACT_MODES, default=_CASE_DEFAULTS["contact"], help="between particles: frictionless sliding (default) or tied once closed (no sliding)")
     g.add_argument("--tied-planes", action="store_true", help="sensitivity option, not the default: tie particle surface nodes to the rigid die planes they touch (rough walls); by default the planes are frictionless mirror planes, as the symmetry of the packing requires")
@@ -173,23 +178,45 @@ def _material(args: argparse.Namespace) -> Material:
     return m
 
 
+_RANDOM_OPTIONS = (("--particles", "particles"), ("--packing-seed", "packing_seed"), ("--rho0", "rho0"), ("--small-fraction", "small_fraction"))
+
+
 def _cell(args: argparse.Namespace) -> Cell:
+    if args.cell != "random":
+        for option, name in _RANDOM_OPTIONS:
+            if getattr(args, name) is not None:
+                raise ValueError(f"{option} applies to --cell random only")
     if args.cell_file is not None:
         if args.cell is not None:
             raise ValueError("--cell and --cell-file exclude each other: give one")
         for option, value in (("--radius", args.radius), ("--aspect-ratio", args.aspect_ratio), ("--size-ratio", args.size_ratio)):
             if value is not None:
                 raise ValueError(f"{option} does not apply to --cell-file: the file gives the sizes")
-        return cells.from_file(args.cell_file)
+        cell = cells.from_file(args.cell_file)
+        return cells.as_periodic(cell) if args.periodic else cell
     name = args.cell or "sc"
+    radius = args.radius if args.radius is not None else cells.DEFAULT_RADIUS_MM
+    aspect = args.aspect_ratio if args.aspect_ratio is not None else 1.0
+    if name == "random":
+        if args.packing_seed is not None and args.packing_seed < 0:
+            raise ValueError(f"--packing-seed = {args.packing_seed}: must be >= 0")
+        if args.periodic:
+            raise ValueError("--periodic does not apply to --cell random: it is periodic already")
+        if args.small_fraction is not None and args.size_ratio is None:
+            raise ValueError("--small-fraction goes with --size-ratio (a bimodal packing)")
+        return cells.random(
+            16 if args.particles is None else args.particles,
+            seed=0 if args.packing_seed is None else args.packing_seed,
+            rho0=args.rho0,
+            radius_mm=radius,
+            aspect_ratio=aspect,
+            size_ratio=args.size_ratio,
+            small_fraction=0.5 if args.small_fraction is None else args.small_fraction,
+        )
     if args.size_ratio is not None and name != "sc2":
-        raise ValueError(f"--size-ratio applies to --cell sc2 only, not --cell {name}")
-    return cells.by_name(
-        name,
-        args.radius if args.radius is not None else cells.DEFAULT_RADIUS_MM,
-        args.aspect_ratio if args.aspect_ratio is not None else 1.0,
-        args.size_ratio,
-    )
+        raise ValueError(f"--size-ratio applies to --cell sc2 and random only, not --cell {name}")
+    cell = cells.by_name(name, radius, aspect, args.size_ratio)
+    return cells.as_periodic(cell) if args.periodic else cell
 
 
 def _fmt(value: float | None) -> str:
@@ -204,7 +231,11 @@ def _report(result: Result) -> None:
     s = result.summary()
     cell, contact = s["cell"], s["contact"]
     planes = ", tied planes (sensitivity option)" if contact["tied_planes"] else ""
-    print(f"cell {cell['name']} ({len(cell['octants'])} octant(s), rho0 {cell['rho0_exact']:.5f}), {contact['mode']} contact{planes}")
+    if cell.get("periodic"):
+        pieces = f"{len(cell['particles'])} whole particle(s), periodic, coordination number {s['coordination_number']:.2f}"
+    else:
+        pieces = f"{len(cell['octants'])} octant(s)"
+    print(f"cell {cell['name']} ({pieces}, rho0 {cell['rho0_exact']:.5f}), {contact['mode']} contact{planes}")
     print(f"status: {s['status']}   final density {s['final_density']:.4f} at t = {s['final_time_s']:.4g} s")
     est = s["error_estimate"]
     print(f"{'rho':>5} {'t FE [s]':>12} {'error est':>10} {'t continuum [s]':>16}")
@@ -242,7 +273,8 @@ def _import_matplotlib() -> None:
 
 # Options that describe the case, which --resume takes from the run's folder.
 _CASE_OPTIONS = (
-    "cell", "cell_file", "aspect_ratio", "radius", "size_ratio", "material", "creep_c", "creep_n", "young",
+    "cell", "cell_file", "aspect_ratio", "radius", "size_ratio", "particles", "packing_seed", "rho0",
+    "small_fraction", "material", "creep_c", "creep_n", "young",
     "poisson", "stress", "until_density", "until_time", "accuracy", "mesh_level", "tolerance", "out",
     "vtu_densities",
 )
@@ -250,6 +282,8 @@ _CASE_OPTIONS = (
 
 def _resume(args: argparse.Namespace) -> int:
     given = [name for name in _CASE_OPTIONS if getattr(args, name) is not None]
+    if args.periodic:
+        given.insert(0, "periodic")
     if given:
         option = "--" + given[0].replace("_", "-")
         raise ValueError(f"--resume takes the case from DIR/run.json: leave out {option}")

@@ -9,8 +9,9 @@ one, a DEM export, needs ``lengths_mm`` and ``boundary``), and
 :func:`coordination_number` counts contacts at a gap tolerance relative to
 the particle size.
 
-Random packings are not yet a cell that :class:`tidens_rs.Case` can press;
-they are the geometry such cells will be built on.
+A periodic packing is a cell :class:`tidens_rs.Case` can press through
+:func:`tidens_rs.cells.from_packing` (or :func:`tidens_rs.cells.random`),
+once it is jammed: nothing but its contacts holds it.
 
 Units: mm.
 """

@@ -6,6 +6,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from . import cells
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
@@ -28,7 +30,7 @@ def plot_density(result: Result) -> Figure:
     rho_end = float(max(rho[-1], c.cell.rho0 + 1e-3))
     tc, rc = result.continuum().curve(min(rho_end, 0.999))
     label = f"FE, {c.cell.name}, level {c.solver.mesh_level}"
-    if len(c.cell.octants) > 1:
+    if cells.has_particle_contact(c.cell):
         label += f", {c.contact} contact"
     if c.tied_planes:
         label += ", tied planes"

@@ -52,6 +52,21 @@ def _cell_summary(cell: Cell) -> dict[str, Any]:
     return out
 
 
+def _particles_summary(cell: Cell) -> dict[str, Any]:
+    """For a periodic cell, its number of whole particles and their mean
+    coordination number at the start (contacts within
+    :data:`tidens_rs.packing.COORDINATION_TOLERANCE` of the mean radius);
+    None for a cell of octants."""
+    if not cell.is_periodic:
+        return {"particles": None, "coordination_number": None}
+    from . import packing
+
+    return {
+        "particles": len(cell.particles),
+        "coordination_number": packing.coordination_number(cells.to_packing(cell)),
+    }
+
+
 @dataclass
 class Result:
     """The outcome of :meth:`tidens_rs.Case.run`.
@@ -169,10 +184,9 @@ class Result:
         rho = self.rel_density
         volume = self.curve["particle_volume_mm3"]
         bulk = m.young_mpa / (3.0 * (1.0 - 2.0 * m.poisson))
-        radius = max(max(a, cc) for _, a, cc in c.cell.octants)
         lz = c.cell.lengths_mm[2]
-        radius = max(max(a, cc) for _, a, cc in c.cell.octants)
-        contact = 2.0 * c.solver.penetration_tolerance * radius / lz if len(c.cell.octants) > 1 else 0.0
+        radius = cells.largest_radius_of(c.cell)
+        contact = 2.0 * c.solver.penetration_tolerance * radius / lz if cells.has_particle_contact(c.cell) else 0.0
         drop = max(1e-12, 10.0 * c.solver.newton_residual_tolerance * c.knockdown * c.stress_mpa / m.young_mpa) + contact
         out: dict[str, Any] = {
             "monotone": bool(np.all(np.diff(rho) >= -drop)),
@@ -233,6 +247,7 @@ class Result:
             "tolerance": c.solver.tolerance,
             "element": c.solver.element,
             "rho0": self.rho0,
+            **_particles_summary(c.cell),
             "final_density": last["rel_density"],
             "final_time_s": last["time_s"],
             "times_to_density_s": reached,

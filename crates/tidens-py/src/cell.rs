@@ -2,7 +2,7 @@
 
 use crate::errors::{Number, Phase, parameter_error, solver_error};
 use pyo3::prelude::*;
-use tidens_solver::{Cell, Octant, SolverError};
+use tidens_solver::{ASPECT_RANGE, Cell, Octant, PlacedSpheroid, RADIUS_RANGE, SolverError};
 
 /// An octant as Python passes it: ((high_x, high_y, high_z), a_mm, c_mm).
 pub(crate) type OctantTuple = ((bool, bool, bool), f64, f64);
@@ -21,14 +21,118 @@ pub(crate) type OctantTuple = ((bool, bool, bool), f64, f64);
 #[pyclass(name = "Cell", module = "tidens_rs._core", frozen)]
 #[derive(Clone, Debug)]
 pub struct PyCell {
-    pub(crate) inner: Cell,
+    pub(crate) inner: CellKind,
 }
+
+/// What a cell holds.
+#[derive(Clone, Debug)]
+pub(crate) enum CellKind {
+    /// A box of mirror planes with particle octants at its corners.
+    Octants(Cell),
+    /// Whole particles in a box periodic along x, y and z.
+    Periodic {
+        name: String,
+        lengths: [f64; 3],
+        particles: Vec<PlacedSpheroid>,
+    },
+}
+
+impl CellKind {
+    pub(crate) fn lengths(&self) -> [f64; 3] {
+        match self {
+            Self::Octants(c) => c.lengths,
+            Self::Periodic { lengths, .. } => *lengths,
+        }
+    }
+
+    fn name(&self) -> &str {
+        match self {
+            Self::Octants(c) => &c.name,
+            Self::Periodic { name, .. } => name,
+        }
+    }
+
+    fn rho0(&self) -> f64 {
+        match self {
+            Self::Octants(c) => c.rho0(),
+            Self::Periodic {
+                lengths, particles, ..
+            } => {
+                let v: f64 = particles
+                    .iter()
+                    .map(|p| 4.0 / 3.0 * std::f64::consts::PI * p.a * p.a * p.c)
+                    .sum();
+                v / lengths.iter().product::<f64>()
+            }
+        }
+    }
+}
+
+/// A particle of a periodic cell as Python passes it: (centre_mm, a_mm,
+/// c_mm, axis).
+pub(crate) type ParticleTuple = ((f64, f64, f64), f64, f64, (f64, f64, f64));
 
 impl PyCell {
     fn preset(cell: Result<Cell, SolverError>) -> PyResult<Self> {
         let inner = cell.map_err(|e| solver_error(e, Phase::Setup))?;
-        Ok(Self { inner })
+        Ok(Self {
+            inner: CellKind::Octants(inner),
+        })
     }
+}
+
+/// The periodic cell's particles, checked: each `particles[k].field`
+/// named in the error.
+fn placed(lengths: [f64; 3], particles: &[ParticleTuple]) -> PyResult<Vec<PlacedSpheroid>> {
+    let (lo, hi) = RADIUS_RANGE;
+    let (alo, ahi) = ASPECT_RANGE;
+    if particles.is_empty() {
+        return Err(pyo3::exceptions::PyValueError::new_err(
+            "particles = []: a periodic cell needs at least one particle",
+        ));
+    }
+    particles
+        .iter()
+        .enumerate()
+        .map(|(k, &((x, y, z), a, c, (ax, ay, az)))| {
+            let at = |field: &str| format!("particles[{k}].{field}");
+            for (field, v) in [("a", a), ("c", c)] {
+                if !(lo..=hi).contains(&v) {
+                    return Err(parameter_error(
+                        &at(field),
+                        Number(v),
+                        &format!("in [{lo:e}, {hi:e}] mm"),
+                    ));
+                }
+            }
+            if !(alo..=ahi).contains(&(c / a)) {
+                return Err(parameter_error(
+                    &at("c"),
+                    Number(c),
+                    &format!("in [{alo}, {ahi}] times a = {a} mm (c/a)"),
+                ));
+            }
+            let centre = [x, y, z];
+            for i in 0..3 {
+                if !(centre[i] >= 0.0 && centre[i] < lengths[i]) {
+                    return Err(parameter_error(
+                        &format!("{}[{i}]", at("centre")),
+                        Number(centre[i]),
+                        &format!("in [0, {}) mm (the box)", lengths[i]),
+                    ));
+                }
+            }
+            let axis = [ax, ay, az];
+            let norm = axis.iter().map(|v| v * v).sum::<f64>().sqrt();
+            if !(norm > 0.0 && norm.is_finite()) {
+                return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                    "{} = ({ax}, {ay}, {az}): must be a non-zero finite vector",
+                    at("axis")
+                )));
+            }
+            Ok(PlacedSpheroid { centre, a, c, axis })
+        })
+        .collect()
 }
 
 /// The core checks the octants in order but does not say which one failed:
@@ -65,7 +169,9 @@ impl PyCell {
             })
             .collect();
         match Cell::new(name.as_str(), lengths, octants.clone()) {
-            Ok(inner) => Ok(Self { inner }),
+            Ok(inner) => Ok(Self {
+                inner: CellKind::Octants(inner),
+            }),
             // The per-octant checks: say which octant.
             Err(
                 err @ SolverError::Parameter {
@@ -115,16 +221,53 @@ impl PyCell {
         Self::preset(Cell::sc2(radius_mm, size_ratio, aspect_ratio))
     }
 
+    /// Whole particles in a box [0,Lx)x[0,Ly)x[0,Lz) periodic along x, y
+    /// and z: lengths_mm = (Lx, Ly, Lz) [mm], z the pressing direction (the
+    /// cell's height shortens, its width and depth stay: the die's uniaxial
+    /// strain); each particle is (centre_mm, a_mm, c_mm, axis): its centre
+    /// in the box, its semi-axes (a across, c along axis) in [1e-6, 1e3] mm
+    /// with c/a in [0.2, 5], and its symmetry axis (any non-zero vector).
+    /// Particles may reach across the box faces: they touch the periodic
+    /// images of the others there. Meshed whole with hex8 elements.
+    /// ValueError names the field (particles[2].centre[0]); overlaps are
+    /// found when the cell is meshed (Simulation raises UnsupportedError).
+    #[staticmethod]
+    fn periodic(
+        name: String,
+        lengths_mm: (f64, f64, f64),
+        particles: Vec<ParticleTuple>,
+    ) -> PyResult<Self> {
+        let lengths = [lengths_mm.0, lengths_mm.1, lengths_mm.2];
+        let (lo, hi) = RADIUS_RANGE;
+        for (i, &l) in lengths.iter().enumerate() {
+            if !(lo..=hi).contains(&l) {
+                return Err(parameter_error(
+                    &format!("lengths_mm[{i}]"),
+                    Number(l),
+                    &format!("in [{lo:e}, {hi:e}] mm"),
+                ));
+            }
+        }
+        let particles = placed(lengths, &particles)?;
+        Ok(Self {
+            inner: CellKind::Periodic {
+                name,
+                lengths,
+                particles,
+            },
+        })
+    }
+
     /// Short name of the packing, e.g. "sc".
     #[getter]
     fn name(&self) -> &str {
-        &self.inner.name
+        self.inner.name()
     }
 
     /// Box edge lengths (Lx, Ly, Lz) [mm].
     #[getter]
     fn lengths_mm(&self) -> (f64, f64, f64) {
-        let [x, y, z] = self.inner.lengths;
+        let [x, y, z] = self.inner.lengths();
         (x, y, z)
     }
 
@@ -134,27 +277,61 @@ impl PyCell {
         self.inner.rho0()
     }
 
+    /// True for a periodic cell of whole particles (Cell.periodic), False
+    /// for a box of mirror planes with octants at its corners.
+    #[getter]
+    fn is_periodic(&self) -> bool {
+        matches!(self.inner, CellKind::Periodic { .. })
+    }
+
     /// The particle pieces as ((high_x, high_y, high_z), a_mm, c_mm): the box
     /// corner at the octant's centre (True = the high end L_i of that axis),
-    /// and the spheroid semi-axes along x, y (a) and z (c) [mm].
+    /// and the spheroid semi-axes along x, y (a) and z (c) [mm]. Empty for a
+    /// periodic cell (see particles).
     #[getter]
     fn octants(&self) -> Vec<OctantTuple> {
-        self.inner
-            .octants
-            .iter()
-            .map(|o| {
-                let [x, y, z] = o.corner;
-                ((x, y, z), o.a, o.c)
-            })
-            .collect()
+        match &self.inner {
+            CellKind::Octants(c) => c
+                .octants
+                .iter()
+                .map(|o| {
+                    let [x, y, z] = o.corner;
+                    ((x, y, z), o.a, o.c)
+                })
+                .collect(),
+            CellKind::Periodic { .. } => Vec::new(),
+        }
+    }
+
+    /// The whole particles of a periodic cell as (centre_mm, a_mm, c_mm,
+    /// axis), the axis normalised; empty for a cell of octants.
+    #[getter]
+    fn particles(&self) -> Vec<ParticleTuple> {
+        match &self.inner {
+            CellKind::Octants(_) => Vec::new(),
+            CellKind::Periodic { particles, .. } => particles
+                .iter()
+                .map(|p| {
+                    let norm = p.axis.iter().map(|v| v * v).sum::<f64>().sqrt();
+                    let [x, y, z] = p.centre;
+                    let [ax, ay, az] = p.axis.map(|v| v / norm);
+                    ((x, y, z), p.a, p.c, (ax, ay, az))
+                })
+                .collect(),
+        }
     }
 
     fn __repr__(&self) -> String {
-        let [x, y, z] = self.inner.lengths;
+        let [x, y, z] = self.inner.lengths();
+        let pieces = match &self.inner {
+            CellKind::Octants(c) => format!("octants={}", c.octants.len()),
+            CellKind::Periodic { particles, .. } => {
+                format!("periodic, particles={}", particles.len())
+            }
+        };
         format!(
-            "Cell(name='{}', lengths_mm=({x:?}, {y:?}, {z:?}), octants={}, rho0={:?})",
-            self.inner.name,
-            self.inner.octants.len(),
+            "Cell(name='{}', lengths_mm=({x:?}, {y:?}, {z:?}), {pieces}, rho0={:?})",
+            self.inner.name(),
             self.inner.rho0()
         )
     }

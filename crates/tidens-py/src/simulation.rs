@@ -8,7 +8,7 @@
 //! the step in progress. Every wait for a lock happens with the GIL released
 //! and no lock is held while waiting for the GIL, so the two cannot deadlock.
 
-use crate::cell::PyCell;
+use crate::cell::{CellKind, PyCell};
 use crate::convert::{
     columns_dict, curve_columns, fields_dict, point_dict, stats_dict, status_name,
 };
@@ -501,6 +501,11 @@ impl PySimulation {
         }
         .checked()?;
         let cell = cell.get().inner.clone();
+        if matches!(cell, CellKind::Periodic { .. }) && kind != ElementKind::Hex8 {
+            return Err(pyo3::exceptions::PyValueError::new_err(
+                "element = tet10: a periodic cell is meshed with hex8 elements only",
+            ));
+        }
         let material = material.get().inner;
         let checkpoint = resume_from
             .map(Checkpoint::from_bytes)
@@ -508,7 +513,12 @@ impl PySimulation {
             .map_err(|e| solver_error(e, Phase::Setup))?;
         let (sim, element_particle) = py
             .detach(move || {
-                let scene = Scene::from_cell(&cell, &options)?.with_element(kind)?;
+                let scene = match &cell {
+                    CellKind::Octants(c) => Scene::from_cell(c, &options)?.with_element(kind)?,
+                    CellKind::Periodic {
+                        lengths, particles, ..
+                    } => Scene::periodic(*lengths, particles, &options)?,
+                };
                 let sim = match &checkpoint {
                     Some(c) => Simulation::resume(&scene, material, settings, c)?,
                     None => Simulation::new(&scene, material, settings)?,

@@ -374,8 +374,9 @@ impl Simulation {
                         c.measure_on(&x, l.slave.0, l.slave.1, l.master.0, l.master.1)
                     })
                 });
+                let worst = (0..r.len()).max_by(|&a, &b| r[a].abs().total_cmp(&r[b].abs()));
                 eprintln!(
-                    "    it {iterations} |R| {r_norm:.3e} tol {tol:.3e} refactor {refactor} planes {:?} particle contacts {} penetration {:.2e}",
+                    "    it {iterations} |R| {r_norm:.3e} tol {tol:.3e} refactor {refactor} planes {:?} particle contacts {} penetration {:.2e}; largest at equation {worst:?} (the piston's is {n})",
                     self.constraints.contact_counts(),
                     eval.contact.terms.len(),
                     eval.contact.max_penetration()

@@ -13,7 +13,9 @@
 //! Nothing holds a particle's rigid motions but its contacts, so a weak
 //! drag does (`crate::evaluation::Stabilisation`), and one node is pinned.
 //!
-//! Not yet reachable from Python. Measured on one whole sphere in a cube
+//! Python builds them with `tidens_rs.cells.periodic` (`as_periodic` of
+//! a lattice cell, `random` for a random jammed packing). Measured on one
+//! whole sphere in a cube
 //! of side 2R (Ti-6Al-4V creep, 10 MPa, mesh level 1, plain mesh), against
 //! the sc octant cell meshed alike: t(0.6) = 13.03 s against 13.64 s,
 //! t(0.7) = 78.5 against 82.0, t(0.8) = 267.0 against 254.4 (the drag at
