@@ -92,6 +92,9 @@ pub(crate) struct RotationFrame {
     pub arms: Vec<nalgebra::Vector3<f64>>,
     /// `J^-1` \[1/mm^2\].
     pub j_inv: nalgebra::Matrix3<f64>,
+    /// The largest `k_rot` \[N/mm^4\]: `ROTATION_HOLD_CAP E h / W`, `h` the
+    /// particle's mean element size (see [`ROTATION_HOLD_CAP`]).
+    pub max_stiffness: f64,
 }
 
 impl RotationFrame {
@@ -185,6 +188,23 @@ pub(crate) const STABILISATION: f64 = 1e-3;
 /// steps and 1214 Newton iterations (before: 6159 iterations to 0.578).
 pub(crate) const ROTATION_HOLD: f64 = 1.0;
 
+/// The rotation hold's spring on its frame, `k_rot W`, is at most this
+/// times `E h` (`E` Young's modulus, `h` the particle's mean element
+/// size, 0.148 R at mesh level 1), about the stiffness of the elements
+/// around a frame node. Like the drag, the hold's `k_rot` grows as 1/de
+/// over short steps, and past that stiffness Newton stalled: two whole
+/// spheres of the bcc lattice in a periodic cell (level 1) failed at rho
+/// = 0.77 in steps cut to 1e-14 s, the residual at twice its tolerance
+/// and largest at two frame nodes. Capped at 0.7 E h they reach 0.8 in
+/// 126 steps and 839 Newton iterations (6 failed attempts), t(0.7),
+/// t(0.75), t(0.8) = 0.276, 1.616, 10.56 s against the bcc octant cell's
+/// 0.273, 1.620, 10.41 s. Capped at E R = 6.7 E h they were at rho = 0.793
+/// after 160 steps and 1613 iterations (stopped there); at 0.01 E R
+/// (0.067 E h) 127 steps and 762 iterations, t(0.7) = 0.284 s (3.9 % off).
+/// The single sphere (sc) to 0.8: 153 steps and 1157 iterations capped,
+/// 150 and 1142 uncapped, the same times within 0.1 %.
+pub(crate) const ROTATION_HOLD_CAP: f64 = 0.7;
+
 impl Evaluation {
     /// True when the element and contact tangents were computed.
     pub fn has_tangent(&self) -> bool {
@@ -247,6 +267,7 @@ impl Simulation {
             let k = st.rotation_factor * st.stiffness;
             if k > 0.0 {
                 for frame in &st.frames {
+                    let k = k.min(frame.max_stiffness);
                     let forces = frame.forces(|d| u[d] - st.reference[d], k);
                     for (&n, f) in frame.nodes.iter().zip(&forces) {
                         for i in 0..3 {
@@ -296,6 +317,7 @@ mod tests {
             weight: 1.7,
             arms: Vec::new(),
             j_inv: nalgebra::Matrix3::zeros(),
+            max_stiffness: f64::INFINITY,
         };
         f.place(|n| all[n]);
         (f, all)

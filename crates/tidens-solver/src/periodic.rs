@@ -66,8 +66,12 @@
 //! Newton iterations (t(0.6) = 12.71 s, t(0.7) = 79.8 s: its mesh is not
 //! the octant's). `beta_rot` = 0.1 failed at rho = 0.567 (t = 3.8 s, steps
 //! cut to 1e-14 s, the residual stalled at 1.2 times the tolerance), and
-//! so did 10, at t = 35.4 s (rho about 0.645); why the stronger hold fails is
-//! not known yet.
+//! so did 10, at t = 35.4 s (rho about 0.645). The hold, like the drag,
+//! stiffens as 1/de over short steps; capped at 0.7 E h (about the
+//! elements' stiffness around a frame node; `ROTATION_HOLD_CAP`), the two
+//! spheres of the bcc lattice reach rho = 0.8 (126 steps, 839 Newton
+//! iterations) within 1.4 % of the bcc octant cell's times, where uncapped
+//! they stalled at 0.774 with the residual largest at two frame nodes.
 
 use crate::error::SolverError;
 use crate::scene::{MeshOptions, Particle, Scene};

@@ -159,7 +159,11 @@ fn particle_contact(
 }
 
 /// The drag of a periodic cell (see [`crate::evaluation::Stabilisation`]).
-fn stabilisation(scene: &Scene, constraints: &Constraints) -> crate::evaluation::Stabilisation {
+fn stabilisation(
+    scene: &Scene,
+    constraints: &Constraints,
+    young: f64,
+) -> crate::evaluation::Stabilisation {
     let n_dof = constraints.dof_count();
     let map = constraints.equation_map();
     let mut volume = vec![0.0; n_dof];
@@ -185,7 +189,14 @@ fn stabilisation(scene: &Scene, constraints: &Constraints) -> crate::evaluation:
     let frames = scene
         .particles
         .iter()
-        .map(|p| rotation_frame(scene.nodes(), p.nodes, &volume, &map))
+        .map(|p| {
+            let mut frame = rotation_frame(scene.nodes(), p.nodes, &volume, &map);
+            let size =
+                (crate::scene::hex_piece(&scene.mesh, p).volume() / p.elements.1 as f64).cbrt();
+            frame.max_stiffness =
+                crate::evaluation::ROTATION_HOLD_CAP * young * size / frame.weight;
+            frame
+        })
         .collect();
     crate::evaluation::Stabilisation {
         volume,
@@ -240,6 +251,7 @@ fn rotation_frame(
         weight: 0.0,
         arms: Vec::new(),
         j_inv: nalgebra::Matrix3::zeros(),
+        max_stiffness: f64::INFINITY,
     };
     frame.place(at);
     frame.weight = particle.trace() / crate::evaluation::moment(&frame.arms).trace();
@@ -341,7 +353,7 @@ impl Simulation {
         let stabilisation = scene
             .periodic
             .as_ref()
-            .map(|_| stabilisation(scene, &constraints));
+            .map(|_| stabilisation(scene, &constraints, material.young));
         let mut assembler = assembler;
         if let Some(st) = &stabilisation {
             assembler.add_couplings(st.frames.iter().map(|f| f.dofs()), &constraints);
