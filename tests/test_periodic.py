@@ -5,6 +5,7 @@ lattices of the presets (``cells.as_periodic``), random jammed packings
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -66,7 +67,7 @@ def test_a_random_cell_is_jammed_and_reproducible() -> None:
     ],
 )
 def test_bad_particles_are_named(particles: list[tuple[Any, ...]], field: str) -> None:
-    with pytest.raises(ValueError, match=field.replace("(", r"\(").replace("[", r"\[").replace("]", r"\]")):
+    with pytest.raises(ValueError, match=re.escape(field)):
         td.cells.periodic(particles, (0.1, 0.1, 0.1))
 
 
@@ -119,3 +120,33 @@ def test_random_cell_options_are_checked(
     err = capsys.readouterr().err
     assert e.value.code == 2 and message in err and len(err.strip().splitlines()) == 1, err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("periodic = true\n[[particles]]\ncentre = [0, 0, 0]\na = 0.05\nc = 0.05\n", "particles[0].axis: missing"),
+        ("periodic = true\nparticles = []\n", "particles = []: must be a non-empty list"),
+        ("periodic = 1\n", "periodic = 1: must be true or false"),
+        ("[[particles]]\ncentre = [0, 0, 0]\na = 0.05\nc = 0.05\naxis = [0, 0, 1]\n", "needs periodic = true"),
+        ("periodic = true\n[[octants]]\ncorner = '000'\na = 0.05\nc = 0.05\n", "lists particles, not octants"),
+    ],
+)
+def test_periodic_cell_files_name_what_is_wrong(tmp_path: Path, text: str, message: str) -> None:
+    path = tmp_path / "cell.toml"
+    path.write_text("lengths_mm = [0.1, 0.1, 0.1]\n" + text)
+    with pytest.raises(ValueError, match=re.escape(message)):
+        td.cells.from_file(path)
+
+
+def test_a_periodic_toml_cell_file_is_the_cell_it_describes(tmp_path: Path) -> None:
+    path = tmp_path / "one.toml"
+    path.write_text(
+        'name = "one"\nlengths_mm = [0.1, 0.1, 0.1]\nperiodic = true\n'
+        "[[particles]]\ncentre = [0.05, 0.05, 0.05]\na = 0.05\nc = 0.05\naxis = [0, 0, 2]\n"
+    )
+    cell = td.cells.from_file(path)
+    assert cell.name == "one" and cell.is_periodic
+    # The axis is normalised; the density is the sphere's over the cube.
+    assert cell.particles == [((0.05, 0.05, 0.05), 0.05, 0.05, (0.0, 0.0, 1.0))]
+    assert cell.rho0 == pytest.approx(math.pi / 6, rel=1e-14)

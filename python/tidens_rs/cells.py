@@ -276,23 +276,29 @@ def from_dict(data: Mapping[str, Any], default_name: str = "custom") -> Cell:
         return _periodic_from_dict(data, default_name)
     if "particles" in data:
         raise ValueError("particles: a cell of whole particles needs periodic = true (otherwise it lists octants)")
-    for key in ("lengths_mm", "octants"):
+    pieces = [tuple(o[key] for key in _OCTANT_KEYS) for o in _tables(data, "octants", _OCTANT_KEYS)]
+    return custom(data.get("name", default_name), data["lengths_mm"], pieces)
+
+
+def _tables(data: Mapping[str, Any], list_key: str, keys: tuple[str, ...]) -> list[Mapping[str, Any]]:
+    """``data[list_key]``, checked: a non-empty list of tables, each with
+    exactly ``keys`` (``lengths_mm`` must be there too)."""
+    for key in ("lengths_mm", list_key):
         if key not in data:
             raise ValueError(f"{key}: missing")
-    octants = data["octants"]
-    if not isinstance(octants, list) or not octants:
-        raise ValueError(f"octants = {octants!r}: must be a non-empty list of tables with keys corner, a, c")
-    pieces = []
-    for k, o in enumerate(octants):
-        where = f"octants[{k}]"
-        if not isinstance(o, Mapping):
-            raise ValueError(f"{where} = {o!r}: must be a table with keys corner, a, c")
-        _no_unknown_keys(where + ".", o, _OCTANT_KEYS)
-        missing = [key for key in _OCTANT_KEYS if key not in o]
+    items = data[list_key]
+    what = f"tables with keys {', '.join(keys)}"
+    if not isinstance(items, list) or not items:
+        raise ValueError(f"{list_key} = {items!r}: must be a non-empty list of {what}")
+    for k, item in enumerate(items):
+        where = f"{list_key}[{k}]"
+        if not isinstance(item, Mapping):
+            raise ValueError(f"{where} = {item!r}: must be a table with keys {', '.join(keys)}")
+        _no_unknown_keys(where + ".", item, keys)
+        missing = [key for key in keys if key not in item]
         if missing:
             raise ValueError(f"{where}.{missing[0]}: missing")
-        pieces.append((o["corner"], o["a"], o["c"]))
-    return custom(data.get("name", default_name), data["lengths_mm"], pieces)
+    return items
 
 
 def from_file(path: str | Path) -> Cell:
@@ -334,24 +340,9 @@ def from_file(path: str | Path) -> Cell:
 
 
 def _periodic_from_dict(data: Mapping[str, Any], default_name: str) -> Cell:
-    for key in ("lengths_mm", "particles"):
-        if key not in data:
-            raise ValueError(f"{key}: missing")
     if "octants" in data:
         raise ValueError("octants: a periodic cell lists particles, not octants")
-    items = data["particles"]
-    if not isinstance(items, list) or not items:
-        raise ValueError(f"particles = {items!r}: must be a non-empty list of tables with keys {', '.join(_PARTICLE_KEYS)}")
-    parts = []
-    for k, p in enumerate(items):
-        where = f"particles[{k}]"
-        if not isinstance(p, Mapping):
-            raise ValueError(f"{where} = {p!r}: must be a table with keys {', '.join(_PARTICLE_KEYS)}")
-        _no_unknown_keys(where + ".", p, _PARTICLE_KEYS)
-        missing = [key for key in _PARTICLE_KEYS if key not in p]
-        if missing:
-            raise ValueError(f"{where}.{missing[0]}: missing")
-        parts.append((p["centre"], p["a"], p["c"], p["axis"]))
+    parts = [tuple(p[key] for key in _PARTICLE_KEYS) for p in _tables(data, "particles", _PARTICLE_KEYS)]
     return periodic(parts, data["lengths_mm"], data.get("name", default_name))
 
 
