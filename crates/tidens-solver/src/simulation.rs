@@ -318,7 +318,7 @@ impl Simulation {
                 settings.contact.tied_planes,
             )?,
         };
-        let assembler = Assembler::new(&body, &constraints);
+        let mut assembler = Assembler::new(&body, &constraints);
         let contact = particle_contact(scene, &material, &settings)?;
         let [lx, ly, lz] = scene.lengths;
         let full_force = settings.load.knockdown * settings.load.stress * lx * ly;
@@ -354,7 +354,6 @@ impl Simulation {
             .periodic
             .as_ref()
             .map(|_| stabilisation(scene, &constraints, material.young));
-        let mut assembler = assembler;
         if let Some(st) = &stabilisation {
             assembler.add_couplings(st.frames.iter().map(|f| f.dofs()), &constraints);
         }
