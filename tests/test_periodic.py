@@ -97,6 +97,9 @@ def test_the_periodic_sc_lattice_runs_from_the_command_line(tmp_path: Path) -> N
     s = json.loads((out / "summary.json").read_text())
     assert s["particles"] == 1 and s["coordination_number"] == pytest.approx(6.0, abs=1e-12)
     assert s["cell"]["periodic"] is True
+    # The drag and the rotation hold carry a part of the load (most in the
+    # first step, whose contacts are barely closed), never all of it.
+    assert 0.0 < s["stats"]["max_drag_share"] < 1.0
     # The whole sphere's mesh has the octant's volume deficit (surface nodes
     # on the sphere), eight times over: rho0 below pi/6.
     assert s["rho0"] < math.pi / 6 and s["final_density"] >= 0.53
