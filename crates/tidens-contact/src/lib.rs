@@ -239,6 +239,11 @@ struct NodeState {
     /// multiplier \[MPa\].
     tie: Option<(usize, usize, [f64; 2])>,
     tie_lambda: [f64; 3],
+    /// The node's gap to this master surface closed at the start \[mm\]
+    /// (see [`ParticleContact::close_initial_gaps`]): added to every
+    /// penetration measured against it.
+    #[serde(default)]
+    offset: f64,
 }
 
 /// The state of a [`ParticleContact`] that a run carries from step to step.
@@ -519,6 +524,33 @@ impl ParticleContact {
         self.touch_force = stiffness;
     }
 
+    /// Closes the gaps of the configuration `x` that are below `limit`
+    /// \[mm\], without strain: each slave node paired with a facet it is
+    /// open from by less than `limit` reads that gap as closed from then
+    /// on (the gap is kept as an offset added to its penetration against
+    /// that master surface). For particles that touch at points, as those
+    /// of a jammed packing do: their faceted surfaces lie inside the
+    /// spheroids by up to the facets' sagitta, so every contact would
+    /// otherwise start open. Returns how many node-surface pairs it closed.
+    pub fn close_initial_gaps(&mut self, x: &[f64], limit: f64) -> usize {
+        self.pair_unpaired(x);
+        let mut closed = Vec::new();
+        for (s, nodes) in self.pairing.iter().enumerate() {
+            for (k, links) in nodes.iter().enumerate() {
+                for l in links {
+                    let gap = -self.measure(x, s, k, l).1;
+                    if gap > 0.0 && gap < limit {
+                        closed.push((s, k, l.master, gap));
+                    }
+                }
+            }
+        }
+        for &(s, k, m, gap) in &closed {
+            self.node_state_mut(s, k, m).offset += gap;
+        }
+        closed.len()
+    }
+
     /// At a converged state `x`, what [`ParticleContact::pair`] will do at
     /// the start of the next step: the links whose node has left its facet
     /// are made afresh, and every node is paired with the surfaces within
@@ -589,7 +621,8 @@ impl ParticleContact {
         let p = point(x, self.surfaces[s].nodes[k]);
         let q = self.surfaces[link.master].facets[link.facet].map(|n| point(x, n));
         let xi = facet::project_from_on(kind, &p, &q, link.start);
-        (xi, facet::penetration_on(kind, &p, &q, xi))
+        let offset = self.node_state(s, k, link.master).offset;
+        (xi, facet::penetration_on(kind, &p, &q, xi) + offset)
     }
 
     /// Drops the links whose node has left its facet grown by
@@ -949,17 +982,18 @@ impl ParticleContact {
         let xi = facet::project_from_on(kind, &p, &q, link.start);
         // Nodes clearly apart from the facet need no derivatives.
         let band = -0.1 * self.settings.search_distance;
-        if lambda <= 0.0 && facet::penetration_on(kind, &p, &q, xi) <= band {
+        let offset = self.node_state(s, k, m).offset;
+        if lambda <= 0.0 && facet::penetration_on(kind, &p, &q, xi) + offset <= band {
             return None;
         }
         let area = 0.5 * self.surfaces[s].areas[k];
         let eps = self.settings.penalty;
         let (pen, grad, hess) = if with_tangent && self.settings.curvature_stiffness {
             let d = facet::hessian_on(kind, &p, &q, xi);
-            (d.value, d.gradient, Some(d.hessian))
+            (d.value + offset, d.gradient, Some(d.hessian))
         } else {
             let d = facet::gradient_on(kind, &p, &q, xi);
-            (d.value, d.gradient, None)
+            (d.value + offset, d.gradient, None)
         };
         let pressure = (lambda + eps * pen).max(0.0);
         // A node near the surface without pressure (a gap below a tenth of
@@ -1122,7 +1156,10 @@ impl ParticleContact {
                     }
                 }
                 states.retain(|(_, st)| {
-                    st.tie.is_some() || st.lambda != 0.0 || st.fold_lambda.iter().any(|&l| l != 0.0)
+                    st.tie.is_some()
+                        || st.lambda != 0.0
+                        || st.offset != 0.0
+                        || st.fold_lambda.iter().any(|&l| l != 0.0)
                 });
             }
         }

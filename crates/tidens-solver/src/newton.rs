@@ -147,7 +147,7 @@ fn debug_link_changes(
     *prev = now;
 }
 
-fn debug_enabled() -> bool {
+pub(crate) fn debug_enabled() -> bool {
     std::env::var_os("TIDENS_DEBUG").is_some()
 }
 

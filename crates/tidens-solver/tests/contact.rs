@@ -392,9 +392,12 @@ fn tying_the_particle_to_the_walls_slows_densification() {
 /// One whole sphere in a periodic cube of side 2R, its mesh turned off the
 /// cube's axes: it touches its six images facet to facet, each contact
 /// open by the faceting (4.8e-4 mm, 1e-2 R, at level 1). The touch force
-/// carries the load until they close; with the touch stiffness in the
+/// carried the load until they closed; with the touch stiffness in the
 /// tangent alone the run failed at its fifteenth step (t = 1e-7 s, the
-/// residual the whole piston force at every iterate).
+/// residual the whole piston force at every iterate). Such gaps are now
+/// closed at the start (`ParticleContact::close_initial_gaps`, below a
+/// tenth of the search distance), and this run starts from closed
+/// contacts.
 #[test]
 fn a_periodic_sphere_whose_contacts_start_open_carries_the_load() {
     use tidens_solver::PlacedSpheroid;
