@@ -529,10 +529,10 @@ fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell() {
     );
 }
 
-/// Two whole spheres of the bcc lattice in a periodic cube touch facet to
-/// facet (their contacts lie on the body diagonals, between the meshes'
-/// nodes), where the octant cell's touch on its mirror planes; the curves
-/// agree within the mesh's contact discretisation. Measured at level 1 to
+/// Two whole spheres of the bcc lattice in a periodic cube touch on the
+/// body diagonals, each the other's periodic images, where the octant
+/// cell's particles touch each other through its mirror planes; the
+/// curves agree within the contact discretisation. Measured at level 1 to
 /// rho = 0.8 (hold capped at 0.1 E R): t(0.7), t(0.75), t(0.8) = 0.276,
 /// 1.616, 10.56 s against the octant cell's 0.273, 1.620, 10.41 s. With the
 /// hold uncapped this run failed at t = 2.61 s, rho = 0.774 (checked).
