@@ -138,14 +138,8 @@ def custom(name: str, lengths_mm: Sequence[float], octants: Sequence[Sequence[An
     if not isinstance(name, str):
         raise ValueError(f"name = {name!r}: must be a string")
     lengths = _numbers("lengths_mm", lengths_mm, 3, "three box edge lengths Lx, Ly, Lz [mm]")
-    octants = _plain(octants)
-    if isinstance(octants, (str, bytes)) or not isinstance(octants, Sequence):
-        raise ValueError(f"octants = {octants!r}: must be a list of (corner, a, c)")
     pieces: list[Octant] = []
-    for k, octant in enumerate(octants):
-        if isinstance(octant, (str, bytes)) or not isinstance(octant, Sequence) or len(octant) != 3:
-            raise ValueError(f"octants[{k}] = {octant!r}: must be (corner, a, c)")
-        corner, a, c = (_plain(x) for x in octant)
+    for k, (corner, a, c) in enumerate(_tuples("octants", octants, ("corner", "a", "c"))):
         pieces.append(
             (
                 _corner(f"octants[{k}].corner", corner),
@@ -170,14 +164,8 @@ def periodic(particles: Sequence[Sequence[Any]], lengths_mm: Sequence[float], na
     if not isinstance(name, str):
         raise ValueError(f"name = {name!r}: must be a string")
     lengths = _numbers("lengths_mm", lengths_mm, 3, "three box edge lengths Lx, Ly, Lz [mm]")
-    items = _plain(particles)
-    if isinstance(items, (str, bytes)) or not isinstance(items, Sequence):
-        raise ValueError(f"particles = {items!r}: must be a list of (centre, a, c, axis)")
     pieces: list[Particle] = []
-    for k, particle in enumerate(items):
-        if isinstance(particle, (str, bytes)) or not isinstance(particle, Sequence) or len(particle) != 4:
-            raise ValueError(f"particles[{k}] = {particle!r}: must be (centre, a, c, axis)")
-        centre, a, c, axis = (_plain(x) for x in particle)
+    for k, (centre, a, c, axis) in enumerate(_tuples("particles", particles, ("centre", "a", "c", "axis"))):
         x = _numbers(f"particles[{k}].centre", centre, 3, "the centre (x, y, z) [mm]")
         n = _numbers(f"particles[{k}].axis", axis, 3, "the symmetry axis (x, y, z)")
         pieces.append(
@@ -427,6 +415,21 @@ def by_name(
         r = DEFAULT_SIZE_RATIO if size_ratio is None else size_ratio
         return sc2(radius_mm, r, aspect_ratio)
     raise ValueError(f"cell = {name!r}: must be one of {', '.join(CELL_NAMES)}")
+
+
+def _tuples(name: str, value: Any, fields: tuple[str, ...]) -> list[list[Any]]:
+    """``value`` checked as a list of tuples of ``fields`` (numpy values as
+    plain Python ones); ValueError naming ``name`` or ``name[k]``."""
+    shape = f"({', '.join(fields)})"
+    items = _plain(value)
+    if isinstance(items, (str, bytes)) or not isinstance(items, Sequence):
+        raise ValueError(f"{name} = {items!r}: must be a list of {shape}")
+    out = []
+    for k, item in enumerate(items):
+        if isinstance(item, (str, bytes)) or not isinstance(item, Sequence) or len(item) != len(fields):
+            raise ValueError(f"{name}[{k}] = {item!r}: must be {shape}")
+        out.append([_plain(x) for x in item])
+    return out
 
 
 def _no_unknown_keys(where: str, data: Mapping[str, Any], known: tuple[str, ...]) -> None:
