@@ -23,15 +23,15 @@ seconds (reported as "timeout").
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
 
 import tidens_rs as td
+
+import saved_rows
 
 BASE_MATERIAL = td.materials.TI64_CREEP_1293K
 BASE_STRESS = 10.0
@@ -206,11 +206,9 @@ def main() -> None:
     ap.add_argument("--level", type=int, default=td.DEFAULT_MESH_LEVEL)
     ap.add_argument("--only", nargs="+", help="groups to run (base, n, C, stress, E/sigma, nu, c/a, density, hold)")
     ap.add_argument("--timeout", type=float, default=600.0)
-    ap.add_argument("--save", type=Path, help="the rows as JSON, written as they come")
-    ap.add_argument("--report-only", type=Path, metavar="JSON", help="no runs: the tables of rows saved with --save")
+    saved_rows.add_options(ap)
     args = ap.parse_args()
-    if args.report_only is not None:
-        report(json.loads(args.report_only.read_text()))
+    if saved_rows.report_only(args, report):
         return
     rows = []
     for cell in args.cells:
@@ -220,8 +218,7 @@ def main() -> None:
             row = run_one(cell, v, args.level, args.timeout)
             rows.append(row)
             print(f"# {cell} {v.label}: {row['status']} {fmt(row.get('wall_s'), '.1f')} s", flush=True)
-            if args.save:
-                args.save.write_text(json.dumps(rows, indent=1, default=lambda o: None))
+            saved_rows.save(args, rows)
     report(rows)
 
 

@@ -18,12 +18,12 @@ octant cell's. ``--timeout`` stops a run after that many seconds.
 from __future__ import annotations
 
 import argparse
-import json
 import time
-from pathlib import Path
 from typing import Any
 
 import tidens_rs as td
+
+import saved_rows
 
 MARKS = (0.6, 0.65, 0.7, 0.75, 0.8, 0.85, 0.9, 0.95)
 
@@ -85,11 +85,9 @@ def main() -> None:
     ap.add_argument("--level", type=int, default=1)
     ap.add_argument("--until", type=float, default=0.8)
     ap.add_argument("--timeout", type=float, default=1800.0)
-    ap.add_argument("--save", type=Path, help="the rows as JSON, written as they come")
-    ap.add_argument("--report-only", type=Path, metavar="JSON", help="no runs: the tables of rows saved with --save")
+    saved_rows.add_options(ap)
     args = ap.parse_args()
-    if args.report_only is not None:
-        report(json.loads(args.report_only.read_text()))
+    if saved_rows.report_only(args, report):
         return
     rows: list[dict[str, Any]] = []
     for cell in args.cells:
@@ -98,8 +96,7 @@ def main() -> None:
             r = rows[-1]
             print(f"{cell} {'periodic' if periodic else 'octants'}: {r['status']}, {r['steps']} steps, "
                   f"{r['newton']} Newton, {r['wall_s']:.1f} s", flush=True)
-            if args.save is not None:
-                args.save.write_text(json.dumps(rows, indent=1))
+            saved_rows.save(args, rows)
     report(rows)
 
 

@@ -31,10 +31,11 @@ import resource
 import subprocess
 import sys
 import time
-from pathlib import Path
 from typing import Any
 
 import tidens_rs as td
+
+import saved_rows
 
 
 def one(particles: int, seed: int, level: int, steps: int) -> dict[str, Any]:
@@ -107,12 +108,10 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--level", type=int, default=1)
     ap.add_argument("--steps", type=int, default=5)
-    ap.add_argument("--save", type=Path, help="the rows as JSON, written as they come")
-    ap.add_argument("--report-only", type=Path, metavar="JSON", help="no runs: the table of rows saved with --save")
+    saved_rows.add_options(ap)
     ap.add_argument("--one", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
-    if args.report_only is not None:
-        report(json.loads(args.report_only.read_text()))
+    if saved_rows.report_only(args, report):
         return
     if args.one:
         print(json.dumps(one(args.particles[0], args.seed, args.level, args.steps)))
@@ -127,8 +126,7 @@ def main() -> None:
         else:
             rows.append(json.loads(done.stdout.strip().splitlines()[-1]))
         print(f"{n} particles: {rows[-1]}", flush=True)
-        if args.save is not None:
-            args.save.write_text(json.dumps(rows, indent=1))
+        saved_rows.save(args, rows)
     report(rows)
 
 
