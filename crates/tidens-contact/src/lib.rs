@@ -83,6 +83,17 @@ const MAKE_FACET_MARGIN: f64 = 1.05;
 /// the radius), and well above round-off.
 const DEEPER_NEIGHBOUR: f64 = 1e-4;
 
+/// How far past its edges (as a fraction of the facet) a neighbour may
+/// hold a node's foot and still take the node from a link it has slid off
+/// (see [`ParticleContact::held_deeper_nearby`]): the foot of a node that
+/// slides along a mirror plane of the cell lies on the edge of a triangle
+/// in that plane, within round-off and the creep of a step of it. On the
+/// sc2 cell at level 1 (n = 15, rho = 0.82) one lay 6e-5 to 2e-4 of a
+/// facet past such an edge and 1e-2 past its own triangle's corner, and
+/// went on 8.6e-4 of the radius into the other particle over the next
+/// sixty steps while both triangles' planes read it open.
+const NEIGHBOUR_EDGE_SLACK: f64 = 1e-3;
+
 /// A node is paired only with a facet whose penetration reading differs
 /// by at most this fraction of the search distance from the node's signed
 /// depth below the surface (see [`ParticleContact::nearest`]); the bilinear
@@ -324,6 +335,19 @@ pub struct Depth {
     pub facet: usize,
     /// Distance \[mm\] to the nearest point of that surface.
     pub depth: f64,
+}
+
+/// The facet parameters of the point of a triangle nearest `xi` along the
+/// parameter axes (`xi` itself within the triangle): a point of the facet
+/// near a foot slightly past its edges.
+fn clamp_into_triangle(xi: [f64; 2]) -> [f64; 2] {
+    let c = [xi[0].max(0.0), xi[1].max(0.0)];
+    let sum = c[0] + c[1];
+    if sum > 1.0 {
+        [c[0] / sum, c[1] / sum]
+    } else {
+        c
+    }
 }
 
 fn point(x: &[f64], node: usize) -> [f64; 3] {
@@ -683,9 +707,18 @@ impl ParticleContact {
 
     /// Whether the node of `link`, read at `penetration` \[mm\] on its facet
     /// (facet parameters `xi`), has slid past that facet's edge onto a
-    /// triangle of the facet's ring that holds it within its edges and
-    /// reads it deeper by more than [`DEEPER_NEIGHBOUR`] of the search
-    /// distance. The link then gives way, and the node is paired afresh
+    /// triangle of the facet's ring that holds it within its edges (to
+    /// [`NEIGHBOUR_EDGE_SLACK`], and nearer to them than the link's own
+    /// facet) and reads it deeper by more than [`DEEPER_NEIGHBOUR`] of the
+    /// search distance, beyond the sag below that triangle's plane of the
+    /// link's facet at the node (its point nearest the node's foot): a
+    /// convex surface lies below every facet's plane, and on the sc2 cell
+    /// at level 1 a node on the edge of two triangles near a mirror plane
+    /// (1e-9 past one, 1e-4 past the other) read 1.2e-3 mm deep on the
+    /// plane of a third triangle of their rings that holds its foot, while
+    /// it lay on the surface; without the sag its link went from one
+    /// triangle to the other at every convergence and the hold to 1e6 s
+    /// failed at rho = 0.993. The link then gives way, and the node is paired afresh
     /// (with the deeper triangle). Only a neighbour without a term across a
     /// fold counts: where the surface folds inward that term holds the node.
     ///
@@ -720,15 +753,33 @@ impl ParticleContact {
             return false;
         }
         let deeper = penetration + DEEPER_NEIGHBOUR * self.settings.search_distance;
+        let own = facet::outside(master.kind, xi);
+        // The point of the link's facet nearest the node's foot: the
+        // surface there. A neighbour's plane reads how far the node lies
+        // below it beyond that point (a convex surface lies below every
+        // facet's plane, by the sag of the one point of it below the other).
+        let corners = master.facets[link.facet].map(|n| point(x, n));
+        let n = facet::shape_on(master.kind, clamp_into_triangle(xi));
+        let surface: [f64; 3] = std::array::from_fn(|i| (0..3).map(|a| n[a] * corners[a][i]).sum());
         master
             .ring(link.facet)
             .iter()
             .filter(|&&g| g != link.facet)
             .any(|&g| {
                 let (xg, pg) = self.measure_on(x, s, k, link.master, g);
-                facet::outside(master.kind, xg) <= 1.0
-                    && pg > deeper
-                    && self.fold(x, link.master, link.facet, g).is_none()
+                let q = master.facets[g].map(|n| point(x, n));
+                let sag = facet::penetration_on(master.kind, &surface, &q, facet::project_on(master.kind, &surface, &q));
+                let fired = facet::outside(master.kind, xg) < own.min(1.0 + NEIGHBOUR_EDGE_SLACK)
+                    && pg - sag.max(0.0) > deeper
+                    && self.fold(x, link.master, link.facet, g).is_none();
+                if fired && std::env::var_os("TIDENS_DEBUG").is_some() {
+                    eprintln!(
+                        "      link of node {:?} to facet {:?} (xi {xi:?}, reading {penetration:.3e} mm) gives way to facet {g} (xi {xg:?}, reading {pg:.3e} mm, the surface's sag below it {sag:.3e} mm)",
+                        (s, k),
+                        (link.master, link.facet)
+                    );
+                }
+                fired
             })
     }
 
@@ -756,6 +807,38 @@ impl ParticleContact {
     /// inside (2.1e-3 of the radius) at rho = 0.9.
     pub fn max_depth(&self, x: &[f64]) -> f64 {
         self.deepest(x).map_or(0.0, |d| d.depth)
+    }
+
+    /// A line on slave node `k` of surface `s` in the configuration `x`, for
+    /// debugging output: each link's facet, facet parameters, `outside`
+    /// measure and penetration \[mm\], the same for every triangle of that
+    /// facet's ring (and whether a term across a fold joins them), and the
+    /// node's multipliers.
+    pub fn describe_node(&self, x: &[f64], s: usize, k: usize) -> String {
+        let mut out = String::new();
+        for l in &self.pairing[s][k] {
+            let kind = self.surfaces[l.master].kind;
+            let (xi, pen) = self.measure(x, s, k, l);
+            out += &format!(
+                "link to surface {} facet {}: xi ({:.4}, {:.4}), outside {:.6}, penetration {pen:.3e}; ring:",
+                l.master,
+                l.facet,
+                xi[0],
+                xi[1],
+                facet::outside(kind, xi)
+            );
+            for &g in self.surfaces[l.master].ring(l.facet) {
+                let (xg, pg) = self.measure_on(x, s, k, l.master, g);
+                let fold = self.fold(x, l.master, l.facet, g).is_some();
+                out += &format!(
+                    " {g} (outside {:.6}, penetration {pg:.3e}{})",
+                    facet::outside(kind, xg),
+                    if fold { ", fold" } else { "" }
+                );
+            }
+            out += "; ";
+        }
+        out + &format!("state {:?}", self.state[s][k])
     }
 
     /// The slave node deepest inside another surface in the configuration

@@ -161,10 +161,19 @@ impl Simulation {
                 .constraints
                 .max_penetration(&state.u, state.piston)
                 .max(state.contact.max_penetration()),
-            max_depth: self
-                .contact
-                .as_ref()
-                .map_or(0.0, |c| c.max_depth(&self.current_coordinates(&state.u))),
+            max_depth: self.contact.as_ref().map_or(0.0, |c| {
+                let x = self.current_coordinates(&state.u);
+                if std::env::var_os("TIDENS_DEBUG").is_some()
+                    && let Some(d) = c.deepest(&x)
+                {
+                    eprintln!(
+                        "  deepest node at t = {:.5e} s: {d:?}; {}",
+                        state.time,
+                        c.describe_node(&x, d.slave, d.node)
+                    );
+                }
+                c.max_depth(&x)
+            }),
         }
     }
 

@@ -47,6 +47,9 @@ pub(crate) struct ConvergedState {
     pub contact: ContactEvaluation,
     /// The step that led here.
     pub previous: Option<PreviousStep>,
+    /// The step before it (for the quadratic predictor).
+    #[serde(default)]
+    pub earlier: Option<PreviousStep>,
 }
 
 /// The contact state of the planes and of the particles, saved before a
@@ -401,6 +404,7 @@ impl Simulation {
                 fields: eval.fields(),
                 contact: ContactEvaluation::default(),
                 previous: None,
+                earlier: None,
             },
             curve: Vec::new(),
             stats: RunStats::default(),
@@ -704,6 +708,7 @@ impl Simulation {
         self.body.commit(&s.eval.body);
         let volume = s.eval.body.volume();
         let state = &mut self.state;
+        state.earlier = state.previous.take();
         state.previous = Some(PreviousStep {
             u: std::mem::take(&mut state.u),
             piston: state.piston,
