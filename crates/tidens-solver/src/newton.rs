@@ -587,10 +587,25 @@ impl Simulation {
                     let f = ev.body.fields();
                     let p = f.mean_stress.iter().fold(0.0f64, |a, b| a.max(b.abs()));
                     let q = f.von_mises.iter().fold(0.0f64, |a, b| a.max(*b));
+                    let worst = (0..rt.len()).max_by(|&a, &b| rt[a].abs().total_cmp(&rt[b].abs()));
+                    let pressed = ev.contact.terms.iter().filter(|t| t.pressure > 0.0).count();
+                    let deep = ev
+                        .contact
+                        .terms
+                        .iter()
+                        .filter(|t| t.penetration > 1e-5)
+                        .count();
+                    let fmax = ev
+                        .contact
+                        .terms
+                        .iter()
+                        .map(|t| t.pressure)
+                        .fold(0.0f64, f64::max);
                     eprintln!(
-                        "        trial {s:.3}: |R| {:.3e}, largest plastic strain increment {:.3e}, |p| up to {p:.3e} MPa, q up to {q:.3e} MPa",
+                        "        trial {s:.3}: |R| {:.3e} at {worst:?}, largest plastic strain increment {:.3e}, |p| up to {p:.3e} MPa, q up to {q:.3e} MPa; contact terms pressed {pressed}, deeper than 1e-5 mm {deep}, largest pressure {fmax:.3e} MPa, max penetration {:.3e}",
                         max_abs(&rt),
-                        ev.body.max_dp()
+                        ev.body.max_dp(),
+                        ev.contact.max_penetration()
                     );
                 }
                 Some((
