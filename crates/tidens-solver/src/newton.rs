@@ -193,34 +193,45 @@ impl Simulation {
     }
 
     /// The first guess of a step of `dt` \[s\]: the displacement extrapolated
-    /// linearly from the last two states (`quadratic` false) or along the
-    /// parabola through the last three (`quadratic` true; None until three
-    /// states exist). On creep flow either is far closer to the solution than
-    /// the last state (even where stiff elasticity makes its residual
-    /// larger).
-    fn predict(&self, dt: f64, quadratic: bool) -> Option<(Vec<f64>, f64)> {
+    /// linearly from the last two states (the last state until there are
+    /// two). On creep flow it is far closer to the solution than the last
+    /// state (even where stiff elasticity makes its residual larger).
+    fn predict(&self, dt: f64) -> (Vec<f64>, f64) {
         let state = &self.state;
         let mut u = state.u.clone();
         let mut piston = state.piston;
-        match (&state.previous, &state.earlier) {
-            _ if !self.settings.newton.extrapolate => {}
-            (Some(prev), Some(earlier)) if quadratic => {
-                let [w0, w1, w2] = quadratic_weights(dt, prev.dt, earlier.dt);
-                for ((x, x1), x2) in u.iter_mut().zip(&prev.u).zip(&earlier.u) {
-                    *x = w0 * *x + w1 * x1 + w2 * x2;
-                }
-                piston = w0 * piston + w1 * prev.piston + w2 * earlier.piston;
+        if self.settings.newton.extrapolate
+            && let Some(prev) = &state.previous
+        {
+            let ratio = dt / prev.dt;
+            for (x, x1) in u.iter_mut().zip(&prev.u) {
+                *x += ratio * (*x - x1);
             }
-            _ if quadratic => return None,
-            (Some(prev), _) => {
-                let ratio = dt / prev.dt;
-                for (x, x1) in u.iter_mut().zip(&prev.u) {
-                    *x += ratio * (*x - x1);
-                }
-                piston += ratio * (piston - prev.piston);
-            }
-            (None, _) => {}
+            piston += ratio * (piston - prev.piston);
         }
+        self.constraints.enforce(&mut u, piston);
+        (u, piston)
+    }
+
+    /// The guess of a step of `dt` \[s\] on the parabola through the last
+    /// three states; None until there are three (or without extrapolation).
+    fn predict_quadratic(&self, dt: f64) -> Option<(Vec<f64>, f64)> {
+        let state = &self.state;
+        let (Some(prev), Some(earlier)) = (&state.previous, &state.earlier) else {
+            return None;
+        };
+        if !self.settings.newton.extrapolate {
+            return None;
+        }
+        let [w0, w1, w2] = quadratic_weights(dt, prev.dt, earlier.dt);
+        let mut u: Vec<f64> = state
+            .u
+            .iter()
+            .zip(&prev.u)
+            .zip(&earlier.u)
+            .map(|((x, x1), x2)| w0 * x + w1 * x1 + w2 * x2)
+            .collect();
+        let piston = w0 * state.piston + w1 * prev.piston + w2 * earlier.piston;
         self.constraints.enforce(&mut u, piston);
         Some((u, piston))
     }
@@ -241,8 +252,9 @@ impl Simulation {
     /// last three states follows the flow to third order, and its residual was
     /// mostly ten times smaller; but where a step's length or the plane
     /// contacts change it can be the worse guess, so the step starts from
-    /// whichever of the two has the smaller residual (one more evaluation a
-    /// step). Newton iterations to rho = 0.9 with the choice, against the linear
+    /// whichever of the two has the smaller residual (both are evaluated,
+    /// and the chosen one's evaluation starts Newton: one more evaluation a
+    /// step, two where the step needs a fresh tangent at its guess). Newton iterations to rho = 0.9 with the choice, against the linear
     /// predictor alone, sc at level 3: 1e-3 MPa 1051 against 1357, E/sigma =
     /// 1e7 952 against 1189, the base 372 against 398. Where particles touch,
     /// the residual of a guess says little of its distance to the solution
@@ -250,29 +262,31 @@ impl Simulation {
     /// sc2's base case at level 1 562 Newton iterations against 383 (551
     /// with the contact forces left out of the comparison): those scenes
     /// keep the linear predictor.
-    fn choose_predictor(&mut self, dt: f64, force: f64) -> (Vec<f64>, f64) {
-        let linear = self
-            .predict(dt, false)
-            .expect("the linear predictor always exists");
-        if self.contact.is_some() {
-            return linear;
+    ///
+    /// Returns the guess, and its evaluation (without tangent) where one
+    /// was made for the choice, for the Newton solve to start from.
+    fn choose_predictor(&mut self, dt: f64, force: f64) -> (Vec<f64>, f64, Option<Evaluation>) {
+        let linear = self.predict(dt);
+        if self.contact.is_some() || self.stabilisation.is_some() {
+            return (linear.0, linear.1, None);
         }
-        let Some(quadratic) = self.predict(dt, true) else {
-            return linear;
+        let Some(quadratic) = self.predict_quadratic(dt) else {
+            return (linear.0, linear.1, None);
         };
         let map = self.constraints.equation_map();
-        let mut residual = |u: &[f64]| match self.evaluate(u, dt, false) {
-            Ok(e) => max_abs(&self.residual(&e.f_int, &map, force)),
-            Err(_) => f64::INFINITY,
+        let mut judge = |u: &[f64]| match self.evaluate(u, dt, false) {
+            Ok(e) => (max_abs(&self.residual(&e.f_int, &map, force)), Some(e)),
+            Err(_) => (f64::INFINITY, None),
         };
-        let (r_linear, r_quadratic) = (residual(&linear.0), residual(&quadratic.0));
+        let (r_linear, e_linear) = judge(&linear.0);
+        let (r_quadratic, e_quadratic) = judge(&quadratic.0);
         if debug_enabled() {
             eprintln!("    predictors: |R| linear {r_linear:.3e}, quadratic {r_quadratic:.3e}");
         }
         if r_quadratic < r_linear {
-            quadratic
+            (quadratic.0, quadratic.1, e_quadratic)
         } else {
-            linear
+            (linear.0, linear.1, e_linear)
         }
     }
 
@@ -340,7 +354,7 @@ impl Simulation {
         let n = self.constraints.dof_count();
         self.constraints.reset_flips();
         let fail = |reason: StepFailure, iterations: usize| Failed { reason, iterations };
-        let (mut u, mut piston) = self.choose_predictor(dt, force);
+        let (mut u, mut piston, judged) = self.choose_predictor(dt, force);
         if let Some(st) = &mut self.stabilisation {
             // The drag of the step is measured from the affine motion the
             // predictor expects, and scaled by its strain increment.
@@ -405,9 +419,14 @@ impl Simulation {
             .factor
             .as_ref()
             .is_none_or(|k| (dt / k.dt).ln().abs() > FRESH_TANGENT_STEP_RATIO.ln());
-        let mut eval = self
-            .evaluate(&u, dt, stale)
-            .map_err(|e| fail(e.into(), 0))?;
+        // The predictor's choice evaluated the guess already; a stale factor
+        // needs the tangent there, which that evaluation did not compute.
+        let mut eval = match judged {
+            Some(e) if !stale => e,
+            _ => self
+                .evaluate(&u, dt, stale)
+                .map_err(|e| fail(e.into(), 0))?,
+        };
         let mut refactor = stale || !self.linear.has_factor();
         let mut iterations = 0;
         // Iterations when the multipliers were last updated: each update
