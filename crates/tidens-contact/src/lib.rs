@@ -718,9 +718,10 @@ impl ParticleContact {
     /// plane of a third triangle of their rings that holds its foot, while
     /// it lay on the surface; without the sag its link went from one
     /// triangle to the other at every convergence and the hold to 1e6 s
-    /// failed at rho = 0.993. The link then gives way, and the node is paired afresh
-    /// (with the deeper triangle). Only a neighbour without a term across a
-    /// fold counts: where the surface folds inward that term holds the node.
+    /// failed at rho = 0.993. The link then gives way, and the node is
+    /// paired afresh (with the deeper triangle). Only a neighbour without a
+    /// term across a fold counts: where the surface folds inward that term
+    /// holds the node.
     ///
     /// Within the margin a link is kept by ([`KEEP_FACET_MARGIN`]), its
     /// facet's plane carried past the edge holds the node off the
@@ -732,8 +733,9 @@ impl ParticleContact {
     /// holds: on the sc2 cell at level 3 (rho = 0.91) a node 0.049 of a
     /// facet past such a corner read 8e-11 mm on its link's plane while it
     /// lay 7.4e-6 mm inside the neighbour (1.5e-4 of the radius), until it
-    /// left the margin (four steps later the depth read 3.2e-7 mm); at n = 15, another one lay 9.8e-5
-    /// mm inside (2e-3 of the radius), 0.049 of its facet past a corner.
+    /// left the margin (four steps later the depth read 3.2e-7 mm); at n =
+    /// 15, another one lay 9.8e-5 mm inside (2e-3 of the radius), 0.049 of
+    /// its facet past a corner.
     ///
     /// Moving links so on every neighbour, across inward folds too (tried
     /// before those folds had terms of their own), cost bcc at level 1
@@ -755,9 +757,9 @@ impl ParticleContact {
         let deeper = penetration + DEEPER_NEIGHBOUR * self.settings.search_distance;
         let own = facet::outside(master.kind, xi);
         // The point of the link's facet nearest the node's foot: the
-        // surface there. A neighbour's plane reads how far the node lies
-        // below it beyond that point (a convex surface lies below every
-        // facet's plane, by the sag of the one point of it below the other).
+        // surface at the node. A neighbour's plane counts only how far the
+        // node lies below it beyond that point, which on a convex surface
+        // lies below the plane too (by the surface's sag).
         let corners = master.facets[link.facet].map(|n| point(x, n));
         let n = facet::shape_on(master.kind, clamp_into_triangle(xi));
         let surface: [f64; 3] = std::array::from_fn(|i| (0..3).map(|a| n[a] * corners[a][i]).sum());
@@ -768,13 +770,16 @@ impl ParticleContact {
             .any(|&g| {
                 let (xg, pg) = self.measure_on(x, s, k, link.master, g);
                 let q = master.facets[g].map(|n| point(x, n));
-                let sag = facet::penetration_on(master.kind, &surface, &q, facet::project_on(master.kind, &surface, &q));
+                let foot = facet::project_on(master.kind, &surface, &q);
+                let sag = facet::penetration_on(master.kind, &surface, &q, foot);
                 let fired = facet::outside(master.kind, xg) < own.min(1.0 + NEIGHBOUR_EDGE_SLACK)
                     && pg - sag.max(0.0) > deeper
                     && self.fold(x, link.master, link.facet, g).is_none();
                 if fired && std::env::var_os("TIDENS_DEBUG").is_some() {
                     eprintln!(
-                        "      link of node {:?} to facet {:?} (xi {xi:?}, reading {penetration:.3e} mm) gives way to facet {g} (xi {xg:?}, reading {pg:.3e} mm, the surface's sag below it {sag:.3e} mm)",
+                        "      link of node {:?} to facet {:?} (xi {xi:?}, reading \
+                         {penetration:.3e} mm) gives way to facet {g} (xi {xg:?}, \
+                         reading {pg:.3e} mm, the surface's sag below it {sag:.3e} mm)",
                         (s, k),
                         (link.master, link.facet)
                     );

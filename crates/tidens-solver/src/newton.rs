@@ -254,14 +254,16 @@ impl Simulation {
     /// contacts change it can be the worse guess, so the step starts from
     /// whichever of the two has the smaller residual (both are evaluated,
     /// and the chosen one's evaluation starts Newton: one more evaluation a
-    /// step, two where the step needs a fresh tangent at its guess). Newton iterations to rho = 0.9 with the choice, against the linear
-    /// predictor alone, sc at level 3: 1e-3 MPa 1051 against 1357, E/sigma =
-    /// 1e7 952 against 1189, the base 372 against 398. Where particles touch,
+    /// step, two where the step needs a fresh tangent at its guess). Newton
+    /// iterations to rho = 0.9 with the choice, against the linear predictor
+    /// alone, sc at level 3: 1e-3 MPa 1051 against 1357, E/sigma = 1e7 952
+    /// against 1189, the base 372 against 398. Where particles touch,
     /// the residual of a guess says little of its distance to the solution
     /// (a penetration is a large force, a gap none), and the same choice cost
     /// sc2's base case at level 1 562 Newton iterations against 383 (551
     /// with the contact forces left out of the comparison): those scenes
-    /// keep the linear predictor.
+    /// keep the linear predictor (as do periodic cells, whose drag is set up
+    /// from the guess after it is chosen).
     ///
     /// Returns the guess, and its evaluation (without tangent) where one
     /// was made for the choice, for the Newton solve to start from.
