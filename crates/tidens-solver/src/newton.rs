@@ -310,6 +310,117 @@ impl Simulation {
         );
     }
 
+    /// The Newton direction for residual `r` with the factorised tangent of
+    /// `eval`: nodes just caught by a plane (`offsets`) go onto it.
+    fn direction(
+        &mut self,
+        eval: &Evaluation,
+        r: &[f64],
+        map: &[usize],
+        offsets: &[(usize, f64)],
+    ) -> Result<Vec<f64>, LinearError> {
+        let mut du: Vec<f64> = r.iter().map(|x| -x).collect();
+        if !offsets.is_empty() {
+            // The linearised effect of the offsets: minus the tangent
+            // times them, gathered like the residual.
+            let lift = self.assembler.tangent_times(eval, offsets);
+            for (d, &m) in map.iter().enumerate() {
+                if m != DOF_DROPPED {
+                    du[m] -= lift[d];
+                }
+            }
+        }
+        let t0 = std::time::Instant::now();
+        let solved = self.linear.solve(&mut du);
+        self.stats.linear_seconds += t0.elapsed().as_secs_f64();
+        solved.map(|_| du)
+    }
+
+    /// The displacement and piston `s` of the way along the direction `du`
+    /// (over the free equations and the piston, `du[n]`) from `(u, piston)`,
+    /// with the planes' constraints enforced.
+    fn point_along(
+        &self,
+        u: &[f64],
+        piston: f64,
+        du: &[f64],
+        map: &[usize],
+        s: f64,
+    ) -> (Vec<f64>, f64) {
+        let n = self.constraints.dof_count();
+        let mut ut = u.to_vec();
+        for d in 0..n {
+            if map[d] == d {
+                ut[d] += s * du[d];
+            }
+        }
+        let pt = piston + s * du[n];
+        self.constraints.enforce(&mut ut, pt);
+        (ut, pt)
+    }
+
+    /// The point `s` of the way along the direction `du` from `(u, piston)`
+    /// (planes enforced), evaluated: its squared residual norm, largest
+    /// residual entry, and the point; None where it cannot be evaluated.
+    #[allow(clippy::too_many_arguments)]
+    fn try_step(
+        &mut self,
+        u: &[f64],
+        piston: f64,
+        du: &[f64],
+        map: &[usize],
+        offsets: &[(usize, f64)],
+        dt: f64,
+        force: f64,
+        s: f64,
+    ) -> Option<(f64, f64, TrialPoint)> {
+        let (mut ut, pt) = self.point_along(u, piston, du, map, s);
+        // A node just caught by a plane goes the same fraction of its way
+        // onto it as the rest of the step: putting it right on the plane
+        // while its neighbours move part of the way would strain the
+        // elements around it out of all proportion.
+        for &(d, _) in offsets {
+            ut[d] = u[d] + s * (ut[d] - u[d]);
+        }
+        let ev = self.evaluate(&ut, dt, false).ok()?;
+        let rt = self.residual(&ev.f_int, map, force);
+        let norm_sq = rt.iter().map(|x| x * x).sum();
+        if debug_enabled() {
+            let f = ev.body.fields();
+            let p = f.mean_stress.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+            let q = f.von_mises.iter().fold(0.0f64, |a, b| a.max(*b));
+            let worst = (0..rt.len()).max_by(|&a, &b| rt[a].abs().total_cmp(&rt[b].abs()));
+            let pressed = ev.contact.terms.iter().filter(|t| t.pressure > 0.0).count();
+            let deep = ev
+                .contact
+                .terms
+                .iter()
+                .filter(|t| t.penetration > 1e-5)
+                .count();
+            let fmax = ev
+                .contact
+                .terms
+                .iter()
+                .map(|t| t.pressure)
+                .fold(0.0f64, f64::max);
+            eprintln!(
+                "        trial {s:.3}: |R| {:.3e} at {worst:?}, largest plastic strain increment {:.3e}, |p| up to {p:.3e} MPa, q up to {q:.3e} MPa; contact terms pressed {pressed}, deeper than 1e-5 mm {deep}, largest pressure {fmax:.3e} MPa, max penetration {:.3e}",
+                max_abs(&rt),
+                ev.body.max_dp(),
+                ev.contact.max_penetration()
+            );
+        }
+        Some((
+            norm_sq,
+            max_abs(&rt),
+            TrialPoint {
+                u: ut,
+                piston: pt,
+                eval: ev,
+            },
+        ))
+    }
+
     /// Assembles the tangent of `eval` (growing the pattern for new contact
     /// couplings) and factorises it.
     fn refactor(&mut self, eval: &Evaluation, map: &[usize], dt: f64) -> Result<(), LinearError> {
@@ -566,78 +677,15 @@ impl Simulation {
                 self.refactor(&eval, &map, dt)
                     .map_err(|e| fail(e.into(), iterations))?;
             }
-            let mut du: Vec<f64> = r.iter().map(|x| -x).collect();
-            if !offsets.is_empty() {
-                // The linearised effect of the offsets: minus the tangent
-                // times them, gathered like the residual.
-                let lift = self.assembler.tangent_times(&eval, &offsets);
-                for (d, &m) in map.iter().enumerate() {
-                    if m != DOF_DROPPED {
-                        du[m] -= lift[d];
-                    }
-                }
-            }
-            let t0 = std::time::Instant::now();
-            let solved = self.linear.solve(&mut du);
-            self.stats.linear_seconds += t0.elapsed().as_secs_f64();
-            solved.map_err(|e| fail(e.into(), iterations))?;
+            let du = self
+                .direction(&eval, &r, &map, &offsets)
+                .map_err(|e| fail(e.into(), iterations))?;
             if debug_enabled() {
                 self.debug_direction(&u, &du, &map);
             }
             let r0_sq: f64 = r.iter().map(|x| x * x).sum();
-            let best = line_search::backtrack(r0_sq, tol, |s| {
-                let mut ut = u.clone();
-                for d in 0..n {
-                    if map[d] == d {
-                        ut[d] += s * du[d];
-                    }
-                }
-                let pt = piston + s * du[n];
-                self.constraints.enforce(&mut ut, pt);
-                // A node just caught by a plane goes the same fraction of its
-                // way onto it as the rest of the step: putting it right on
-                // the plane while its neighbours move part of the way would
-                // strain the elements around it out of all proportion.
-                for &(d, _) in &offsets {
-                    ut[d] = u[d] + s * (ut[d] - u[d]);
-                }
-                let ev = self.evaluate(&ut, dt, false).ok()?;
-                let rt = self.residual(&ev.f_int, &map, force);
-                let norm_sq = rt.iter().map(|x| x * x).sum();
-                if debug_enabled() {
-                    let f = ev.body.fields();
-                    let p = f.mean_stress.iter().fold(0.0f64, |a, b| a.max(b.abs()));
-                    let q = f.von_mises.iter().fold(0.0f64, |a, b| a.max(*b));
-                    let worst = (0..rt.len()).max_by(|&a, &b| rt[a].abs().total_cmp(&rt[b].abs()));
-                    let pressed = ev.contact.terms.iter().filter(|t| t.pressure > 0.0).count();
-                    let deep = ev
-                        .contact
-                        .terms
-                        .iter()
-                        .filter(|t| t.penetration > 1e-5)
-                        .count();
-                    let fmax = ev
-                        .contact
-                        .terms
-                        .iter()
-                        .map(|t| t.pressure)
-                        .fold(0.0f64, f64::max);
-                    eprintln!(
-                        "        trial {s:.3}: |R| {:.3e} at {worst:?}, largest plastic strain increment {:.3e}, |p| up to {p:.3e} MPa, q up to {q:.3e} MPa; contact terms pressed {pressed}, deeper than 1e-5 mm {deep}, largest pressure {fmax:.3e} MPa, max penetration {:.3e}",
-                        max_abs(&rt),
-                        ev.body.max_dp(),
-                        ev.contact.max_penetration()
-                    );
-                }
-                Some((
-                    norm_sq,
-                    max_abs(&rt),
-                    TrialPoint {
-                        u: ut,
-                        piston: pt,
-                        eval: ev,
-                    },
-                ))
+            let best = line_search::backtrack(r0_sq, tol, |st| {
+                self.try_step(&u, piston, &du, &map, &offsets, dt, force, st)
             });
             let Some(Trial {
                 step, norm, point, ..
@@ -738,14 +786,7 @@ mod tests {
             .collect();
         let kv = k.mul_vec(&v);
         let mut residual_at = |s: f64| {
-            let mut u = u0.clone();
-            for d in 0..n {
-                if map[d] == d {
-                    u[d] += s * v[d];
-                }
-            }
-            let piston = piston0 + s * v[n];
-            sim.constraints.enforce(&mut u, piston);
+            let (u, _) = sim.point_along(&u0, piston0, &v, &map, s);
             let ev = sim.evaluate(&u, dt, false).unwrap();
             sim.residual(&ev.f_int, &map, force)
         };
