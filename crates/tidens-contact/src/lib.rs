@@ -123,6 +123,10 @@ const ROUND_OFF_FOLD: f64 = 1e-8;
 /// levels 1 to 4).
 const FOLD_SLOTS: usize = 24;
 
+/// A node open from its facet by more than this fraction of the search
+/// distance, without pressure, has no contact term (it is clearly apart).
+pub const NEAR_BAND: f64 = 0.1;
+
 /// Dofs of one contact term: a slave node and the four nodes of a facet.
 pub const TERM_DOFS: usize = 15;
 
@@ -1154,7 +1158,7 @@ impl ParticleContact {
         let kind = self.surfaces[m].kind;
         let xi = facet::project_from_on(kind, &p, &q, link.start);
         // Nodes clearly apart from the facet need no derivatives.
-        let band = -0.1 * self.settings.search_distance;
+        let band = -NEAR_BAND * self.settings.search_distance;
         let offset = self.node_state(s, k, m).offset;
         if lambda <= 0.0 && facet::penetration_on(kind, &p, &q, xi) + offset <= band {
             return None;

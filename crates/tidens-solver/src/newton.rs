@@ -170,6 +170,60 @@ struct TrialPoint {
     eval: Evaluation,
 }
 
+/// Where along a Newton direction the first particle contact closes that
+/// the direction does not see.
+///
+/// A contact open at the iterate brings no stiffness to the tangent, and
+/// the direction can carry it deep into the other particle; the full step's
+/// residual then rises, the quadratic model cuts the step to a tenth, and
+/// the next direction, from the same contact set, aims at the same point
+/// again: Newton creeps towards it by tenths until the contact closes. On
+/// eight random spheres at level 1 (seed 1, t = 0.807 s), nodes open by
+/// 5e-5 to 1.1e-4 mm at the iterate lay up to 1.1e-4 mm deep at the full
+/// step, eleven iterations in a row took a tenth of their direction, and
+/// the residual fell by a tenth each. The step is cut instead to where the
+/// first such contact reaches the penetration tolerance (each term's
+/// penetration taken linear along the direction), so that the next
+/// tangent holds it.
+struct Closing {
+    /// Penetration \[mm\] of each contact term at the iterate.
+    open: std::collections::HashMap<ClosingKey, f64>,
+    /// The penetration of a term not evaluated at the iterate (its node
+    /// farther from the facet than the contact band) \[mm\]: the band's
+    /// edge, which makes its closing step come early rather than late.
+    unknown: f64,
+    /// The penetration at which a contact counts as closed \[mm\].
+    allowed: f64,
+}
+
+/// A contact term's slave node, master facet and fold slot.
+type ClosingKey = ((usize, usize), (usize, usize), Option<usize>);
+
+impl Closing {
+    fn key(t: &tidens_contact::ContactTerm) -> ClosingKey {
+        (t.slave, t.master, t.fold.map(|f| f.0))
+    }
+
+    /// The fraction of the direction at which the first term deeper than
+    /// `allowed` at its end (`at_end`, the full step's contact) and not
+    /// at the iterate reaches `allowed`.
+    fn first_closure(&self, at_end: &tidens_contact::ContactEvaluation) -> Option<f64> {
+        at_end
+            .terms
+            .iter()
+            .filter(|t| t.penetration > self.allowed)
+            .filter_map(|t| {
+                let start = self
+                    .open
+                    .get(&Self::key(t))
+                    .copied()
+                    .unwrap_or(self.unknown);
+                (start < self.allowed).then(|| (self.allowed - start) / (t.penetration - start))
+            })
+            .min_by(f64::total_cmp)
+    }
+}
+
 impl Simulation {
     /// Global residual: internal forces gathered into equations, plus the
     /// piston's load term `force` \[N\].
@@ -684,9 +738,22 @@ impl Simulation {
                 self.debug_direction(&u, &du, &map);
             }
             let r0_sq: f64 = r.iter().map(|x| x * x).sum();
-            let best = line_search::backtrack(r0_sq, tol, |st| {
-                self.try_step(&u, piston, &du, &map, &offsets, dt, force, st)
+            let closing = self.contact.as_ref().map(|c| Closing {
+                open: eval
+                    .contact
+                    .terms
+                    .iter()
+                    .map(|t| (Closing::key(t), t.penetration))
+                    .collect(),
+                unknown: -c.settings().search_distance * tidens_contact::NEAR_BAND,
+                allowed: self.penetration_tol,
             });
+            let best = line_search::backtrack(
+                r0_sq,
+                tol,
+                |st| self.try_step(&u, piston, &du, &map, &offsets, dt, force, st),
+                |p: &TrialPoint| closing.as_ref()?.first_closure(&p.eval.contact),
+            );
             let Some(Trial {
                 step, norm, point, ..
             }) = best
@@ -732,6 +799,51 @@ impl Simulation {
 #[cfg(test)]
 mod tests {
     use tidens_fem::DOF_DROPPED;
+
+    /// A contact term of slave node `k` of surface 0 on facet `f` of
+    /// surface 1, `penetration` deep \[mm\].
+    fn term(k: usize, f: usize, penetration: f64) -> tidens_contact::ContactTerm {
+        tidens_contact::ContactTerm {
+            dofs: [0; tidens_contact::TERM_DOFS],
+            force: [0.0; tidens_contact::TERM_DOFS],
+            tangent: Vec::new(),
+            pressure: 0.0,
+            penetration,
+            slave: (0, k),
+            master: (1, f),
+            location: [0.0; 2],
+            fold: None,
+        }
+    }
+
+    /// Penetrations linear along the direction: a node open by 3e-5 mm at
+    /// the iterate and 9e-5 mm deep at the full step reaches 1e-5 mm at
+    /// a third of the step; one pressed at both ends, or open at its end,
+    /// closes nothing; one not evaluated at the iterate starts at the band.
+    #[test]
+    fn the_first_contact_to_close_names_the_step() {
+        use super::Closing;
+        let at_iterate = [term(0, 0, -3e-5), term(1, 0, 2e-5), term(2, 0, -1e-4)];
+        let closing = Closing {
+            open: at_iterate
+                .iter()
+                .map(|t| (Closing::key(t), t.penetration))
+                .collect(),
+            unknown: -1e-3,
+            allowed: 1e-5,
+        };
+        let end = |terms: Vec<tidens_contact::ContactTerm>| {
+            closing.first_closure(&tidens_contact::ContactEvaluation { terms })
+        };
+        let s = end(vec![term(0, 0, 9e-5), term(1, 0, 4e-5), term(2, 0, -5e-5)]).unwrap();
+        assert!((s - 1.0 / 3.0).abs() < 1e-12, "{s}");
+        assert_eq!(end(vec![term(1, 0, 4e-5), term(2, 0, -5e-5)]), None);
+        let s = end(vec![term(3, 0, 2e-5 + 1e-3)]).unwrap();
+        assert!((s - 0.5).abs() < 1e-12, "{s}");
+        // The earliest closure of several.
+        let s = end(vec![term(0, 0, 9e-5), term(3, 0, 2e-5 + 1e-3)]).unwrap();
+        assert!((s - 1.0 / 3.0).abs() < 1e-12, "{s}");
+    }
 
     /// The quadratic predictor's weights reproduce any parabola in time
     /// exactly at uneven steps (a step twice the last, the last half the
