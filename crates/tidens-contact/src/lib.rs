@@ -649,6 +649,27 @@ impl ParticleContact {
         touching
     }
 
+    /// Between two Newton iterations at `x`: the links whose node has left
+    /// its facet are made afresh, and the nodes that came within reach of
+    /// a surface are paired with it ([`ParticleContact::repair`]). Returns
+    /// whether any link changed (then the contact terms at `x` are not
+    /// those of the links they were evaluated with).
+    pub fn relink(&mut self, x: &[f64]) -> bool {
+        let facets = |p: &[Vec<NodePairing>]| -> Vec<(usize, usize, usize, usize)> {
+            p.iter()
+                .enumerate()
+                .flat_map(|(s, nodes)| {
+                    nodes.iter().enumerate().flat_map(move |(k, links)| {
+                        links.iter().map(move |l| (s, k, l.master, l.facet))
+                    })
+                })
+                .collect()
+        };
+        let before = facets(&self.pairing);
+        self.repair(x);
+        facets(&self.pairing) != before
+    }
+
     /// Facet parameters and penetration \[mm\] of slave node `k` of surface
     /// `s` measured on facet `f` of surface `m` (its patch extended beyond
     /// its edges if need be; Newton on the projection from the facet's

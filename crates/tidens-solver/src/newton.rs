@@ -769,7 +769,33 @@ impl Simulation {
             u = point.u;
             piston = point.piston;
             eval = point.eval;
+            // A node that slid past its facet's edge is paired with the
+            // facet it is over now, not at convergence: kept on its old
+            // facet's plane it reads past a ridge off the surface, and
+            // Newton would converge to a state that holds it there, then
+            // go on from it. On eight random spheres at level 1, seed 1,
+            // 40 steps: 276 Newton iterations to t = 0.829 s, against 361
+            // to 0.808 s pairing at convergence only.
+            if self.relink_contacts(&u) {
+                eval = self
+                    .evaluate(&u, dt, false)
+                    .map_err(|e| fail(e.into(), iterations))?;
+            }
         }
+    }
+
+    /// Pairs afresh, between two Newton iterations at displacement `u`,
+    /// the nodes that left their facet or came near another surface;
+    /// returns whether any link changed.
+    fn relink_contacts(&mut self, u: &[f64]) -> bool {
+        if self.contact.is_none() {
+            return false;
+        }
+        let t0 = std::time::Instant::now();
+        let x = self.current_coordinates(u);
+        let changed = self.contact.as_mut().is_some_and(|c| c.relink(&x));
+        self.stats.contact_seconds += t0.elapsed().as_secs_f64();
+        changed
     }
 
     /// Pairs the surface nodes with master facets at displacement `u`: all

@@ -197,9 +197,12 @@ fn with_tangent(
 /// initial-stress term at the transient pressures of a stiff material's
 /// predictor (sc at E/sigma = 1e7). The tangent the solver factorises by
 /// default leaves those parts out where they would dominate: it is
-/// positive definite (every factorisation a Cholesky), Newton needs fewer
-/// iterations, and since the residual is the same, so is the curve, within
-/// what the step control and the contact events leave (1 %).
+/// positive definite (every factorisation a Cholesky), Newton needs no
+/// more iterations (bcc: 214 with either, since nodes that slide off their
+/// facet are paired afresh between iterations; 215 against 227 before; sc
+/// at E/sigma = 1e7: 304 against 660), and since the residual is the same,
+/// so is the curve, within what the step control and the contact events
+/// leave (1 %).
 #[test]
 fn the_default_tangent_is_positive_definite_where_the_consistent_one_is_not() {
     let ti64 = Preset::Ti64Creep1293K.material();
@@ -238,7 +241,7 @@ fn the_default_tangent_is_positive_definite_where_the_consistent_one_is_not() {
             "{name}: an indefinite default tangent"
         );
         assert!(
-            d.newton_iterations < e.newton_iterations,
+            d.newton_iterations <= e.newton_iterations,
             "{name}: {} against {}",
             d.newton_iterations,
             e.newton_iterations
