@@ -31,12 +31,14 @@
 //!   [`ParticleContact::augment`] updates the multipliers (Uzawa) until the
 //!   penetration is below its tolerance.
 //! - within a step each node keeps the facets it was paired with at the
-//!   step's start ([`ParticleContact::pair`]), and its projection on each
-//!   starts where it projected then (one root of the closest-point
-//!   conditions followed), so the residual stays smooth while Newton
-//!   iterates; at convergence the nodes that slid off their
-//!   facet or came near another surface are paired afresh
-//!   ([`ParticleContact::repair`]), and Newton goes on if one touches.
+//!   step's start ([`ParticleContact::pair`]) while it stays on them (to
+//!   a margin), and its projection on each starts where it projected then
+//!   (one root of the closest-point conditions followed), so the residual
+//!   stays smooth while Newton iterates; between Newton iterations
+//!   ([`ParticleContact::relink`]) and at convergence
+//!   ([`ParticleContact::repair`]) the nodes that slid off their facet or
+//!   came near another surface are paired afresh, and at convergence
+//!   Newton goes on if one touches.
 
 mod error;
 pub mod facet;
@@ -612,6 +614,22 @@ impl ParticleContact {
     /// inside (or far off) the surface it is really on; the step that
     /// follows would start from that state with the true penetration.
     pub fn repair(&mut self, x: &[f64]) -> usize {
+        self.pair_afresh(x).0
+    }
+
+    /// Between two Newton iterations at `x`: the links whose node has left
+    /// its facet are made afresh, and the nodes that came within reach of
+    /// a surface are paired with it, as [`ParticleContact::repair`] does at
+    /// convergence. Returns whether any link changed (then the contact
+    /// terms at `x` are not those of the links they were evaluated with).
+    pub fn relink(&mut self, x: &[f64]) -> bool {
+        self.pair_afresh(x).1
+    }
+
+    /// Drops the links whose node left its facet and pairs the unpaired
+    /// nodes at `x`; returns how many of the new links touch or press, and
+    /// whether any link was dropped or made.
+    fn pair_afresh(&mut self, x: &[f64]) -> (usize, bool) {
         let before = self.pairing.clone();
         self.drop_left(x, false);
         self.pair_unpaired(x);
@@ -619,16 +637,21 @@ impl ParticleContact {
         // have its nearest facet's patch project it beyond the margin, and
         // paired again with the same facet it must not count (Newton would
         // go on at the same state for ever).
+        let same = |a: &Link, b: &Link| (a.master, a.facet) == (b.master, b.facet);
         let mut touching = 0;
+        let mut changed = false;
         for (s, nodes) in self.pairing.iter().enumerate() {
             for (k, links) in nodes.iter().enumerate() {
+                let old = &before[s][k];
+                changed |= old.iter().any(|b| !links.iter().any(|l| same(l, b)));
                 for l in links {
-                    let new = !before[s][k]
-                        .iter()
-                        .any(|b| (b.master, b.facet) == (l.master, l.facet));
-                    if new && self.node_term(x, s, k, l, false).is_some() {
+                    if old.iter().any(|b| same(l, b)) {
+                        continue;
+                    }
+                    changed = true;
+                    if self.node_term(x, s, k, l, false).is_some() {
                         if std::env::var_os("TIDENS_DEBUG").is_some() {
-                            let olds: Vec<_> = before[s][k]
+                            let olds: Vec<_> = old
                                 .iter()
                                 .map(|b| ((b.master, b.facet), self.measure(x, s, k, b)))
                                 .collect();
@@ -646,28 +669,7 @@ impl ParticleContact {
                 }
             }
         }
-        touching
-    }
-
-    /// Between two Newton iterations at `x`: the links whose node has left
-    /// its facet are made afresh, and the nodes that came within reach of
-    /// a surface are paired with it ([`ParticleContact::repair`]). Returns
-    /// whether any link changed (then the contact terms at `x` are not
-    /// those of the links they were evaluated with).
-    pub fn relink(&mut self, x: &[f64]) -> bool {
-        let facets = |p: &[Vec<NodePairing>]| -> Vec<(usize, usize, usize, usize)> {
-            p.iter()
-                .enumerate()
-                .flat_map(|(s, nodes)| {
-                    nodes.iter().enumerate().flat_map(move |(k, links)| {
-                        links.iter().map(move |l| (s, k, l.master, l.facet))
-                    })
-                })
-                .collect()
-        };
-        let before = facets(&self.pairing);
-        self.repair(x);
-        facets(&self.pairing) != before
+        (touching, changed)
     }
 
     /// Facet parameters and penetration \[mm\] of slave node `k` of surface
