@@ -138,7 +138,7 @@ class Packing:
         jam: bool = False,
     ) -> Packing:
         """A random dense packing at relative density rho0 (ValueError naming the parameter);
-        jam=True: where it jams below rho0, the densest state reached."""
+        jam=True: where it first jams below rho0, that state."""
     @staticmethod
     def from_text(text: str, lengths_mm: tuple[float, float, float], boundary: str = "periodic") -> Packing:
         """Reads `x y z a [c [ax ay az]]` lines (mm) in the box lengths_mm."""

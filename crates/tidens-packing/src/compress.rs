@@ -7,12 +7,16 @@
 //! `s = (rho / rho0)^(1/3)`), which is the same geometry as a box shrinking
 //! around particles of fixed size. A step that cannot be relaxed is undone
 //! and halved; when the step falls below [`STEP_MIN`] the packing is jammed
-//! below the target: it is then decompressed by [`SHAKE_DECOMPRESSION`],
-//! shaken (random displacements and rotations) and compressed again, at most
-//! [`MAX_SHAKES`] times. When asked to, the densest state is then refined:
-//! its jamming point is located with steps down to [`REFINE_STEP_MIN`] and
-//! overlaps relaxed to [`REFINE_TOLERANCE`] times the tolerance, and the last
-//! jammed state, shrunk until no overlap is left, is kept.
+//! below the target. To reach the target all the same it is then
+//! decompressed by [`SHAKE_DECOMPRESSION`], shaken (random displacements
+//! and rotations) and compressed again, at most [`MAX_SHAKES`] times: the
+//! shakes anneal it towards denser, more ordered states. A jammed packing
+//! (`refine`) is not shaken: the state at its first jam is refined, its
+//! jamming point located with steps down to [`REFINE_STEP_MIN`] and
+//! overlaps relaxed to [`REFINE_TOLERANCE`] times the tolerance, and the
+//! last jammed state, shrunk until no overlap is left, is kept. Shaken, 8
+//! and 16 spheres in a cube jammed in one ordered state whatever the seed,
+//! and 32 crystallised into fcc for 6 seeds of 20.
 
 use nalgebra::{UnitVector3, Vector3};
 use rand::Rng;
@@ -224,9 +228,9 @@ impl Compressor<'_> {
 
 /// Compresses the particles toward `rho0`: the relaxed centres and axes at
 /// `rho0`, or, when the packing jams below it, the densest overlap-free
-/// state found (with `refine`, the jamming point of that state is then
-/// located to a density step of [`REFINE_STEP_MIN`]). None when the random
-/// start cannot be relaxed.
+/// state found after the shakes; with `refine`, the state at the first jam
+/// (not shaken), its jamming point located to a density step of
+/// [`REFINE_STEP_MIN`]. None when the random start cannot be relaxed.
 pub(crate) fn compress(
     problem: &Problem,
     rng: &mut ChaCha8Rng,
@@ -284,8 +288,9 @@ pub(crate) fn compress(
         if c.climb(step, STEP_MIN, problem.tolerance) {
             return Some(c.result());
         }
-        // Jammed below rho0: decompress, shake, compress again.
-        if !c.shake(rng) {
+        // Jammed below rho0: a jammed packing is refined as it is; to
+        // reach rho0, decompress, shake, compress again.
+        if refine || !c.shake(rng) {
             break;
         }
         step = 0.1 * STEP_MAX;

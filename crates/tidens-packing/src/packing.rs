@@ -103,8 +103,9 @@ impl Packing {
     }
 
     /// A jammed packing: the protocol of [`Packing::generate`] run toward
-    /// `spec.rho0` (typically [`crate::RHO0_MAX`], "as dense as it gets"),
-    /// returning the densest overlap-free state it finds instead of
+    /// `spec.rho0` (typically [`crate::RHO0_MAX`], "as far as it goes"),
+    /// returning the state where it first jams instead of shaking it
+    /// (which anneals small boxes into ordered states) or reporting
     /// [`PackingError::Rho0Unreachable`]. That state is refined first: its
     /// jamming point is located by halving the density step down to 1e-8,
     /// relaxing to overlaps of 1e-10 times the mean radius, and the jammed

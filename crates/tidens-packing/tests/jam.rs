@@ -10,9 +10,9 @@ use tidens_packing::{
 };
 
 /// Contact tolerance relative to the mean radius. The contact gaps of a
-/// jammed packing are at most 1e-6 mean radii (at most 1.6e-7 for 32
-/// monodisperse spheres over 20 seeds), the next gaps at least 2.7e-5 for 32
-/// monodisperse spheres (3e-6 for other cases measured): 1e-5 falls between.
+/// jammed packing are at most 1e-6 mean radii (below 1e-7 for 18 of the 19
+/// jammed seeds of 20 of 32 monodisperse spheres), the next gaps mostly
+/// beyond 1e-5 (seeds 6 and 8 have one or two pairs at 1e-6 to 1e-5).
 const CONTACT: f64 = 1e-5;
 
 fn jam_spec(particles: usize, seed: u64) -> PackingSpec {
@@ -24,8 +24,8 @@ fn jam_spec(particles: usize, seed: u64) -> PackingSpec {
     }
 }
 
-/// Seeds of 32 monodisperse spheres whose packing jams (seeds 6, 7 and 9,
-/// among others, crystallise into fcc, 2 x 2 x 2 cells, and reach 0.74).
+/// Seeds of 32 monodisperse spheres whose packing jams (seed 15 of the
+/// first 20 crystallises into fcc, 2 x 2 x 2 cells, and reaches 0.74).
 const SEEDS_32: [u64; 5] = [0, 1, 2, 3, 4];
 
 /// The particles have exactly the sizes of the spec: those of `generate` at
@@ -73,9 +73,8 @@ fn check_geometry(p: &Packing, s: &PackingSpec) {
     }
 }
 
-/// (a) 32 monodisperse spheres jam at 0.638-0.651 (14 jammed seeds of 20
-/// measured); bound [0.62, 0.67]. `jam` is at least as dense as the densest
-/// state `generate` reports (it refines that state), and seeded.
+/// (a) 32 monodisperse spheres jam at 0.598-0.651 (19 jammed seeds of 20
+/// measured; seeds 0-4: 0.625-0.651); bound [0.60, 0.67]. Seeded.
 #[test]
 fn jam_of_32_spheres_reaches_random_close_packing() {
     for seed in SEEDS_32 {
@@ -83,7 +82,7 @@ fn jam_of_32_spheres_reaches_random_close_packing() {
         let p = Packing::jam(&s).unwrap();
         let rho = p.rel_density();
         println!("32 spheres, seed {seed}: jammed at {rho:.6}");
-        assert!((0.62..=0.67).contains(&rho), "seed {seed}: {rho}");
+        assert!((0.60..=0.67).contains(&rho), "seed {seed}: {rho}");
         check_geometry(&p, &s);
         check_sizes(&p, &s);
         // The box is the one sized for rho0, scaled: rel_density is the
@@ -91,15 +90,10 @@ fn jam_of_32_spheres_reaches_random_close_packing() {
         let volume: f64 = p.particles.iter().map(|q| q.volume()).sum();
         let side = (volume / rho).cbrt();
         assert!((p.lengths[0] / side - 1.0).abs() < 1e-12);
-        match Packing::generate(&s) {
-            Err(PackingError::Rho0Unreachable { reached, .. }) => {
-                assert!(
-                    rho >= reached - 1e-6,
-                    "jam {rho} below generate's {reached}"
-                );
-            }
-            other => panic!("{other:?}"),
-        }
+        assert!(matches!(
+            Packing::generate(&s),
+            Err(PackingError::Rho0Unreachable { .. })
+        ));
         assert_eq!(
             Packing::jam(&s).unwrap(),
             p,
@@ -122,11 +116,12 @@ fn jam_of_32_spheres_reaches_random_close_packing() {
 
 /// (b) The rattler-free backbone of a jammed packing is isostatic:
 /// `3 (N' - 1) + 1` contacts among `N'` particles, a mean coordination number
-/// of 5.867-5.875 for `N'` = 30 to 32 (every one of the 14 jammed seeds of 20
-/// measured, 28 to 32 particles held). Bounds: `Z'` in [5.75, 6.1], at least
+/// of 5.867-5.875 for `N'` = 30 to 32 (18 of the 19 jammed seeds of 20
+/// measured, seed 6 a contact short; 30 to 32 particles held). Bounds: `Z'` in [5.75, 6.1], at least
 /// 28 held. The contacts are separated from the other pairs: no gap in
-/// (1e-6, 1e-5] mean radii (measured: contacts at most 1.6e-7, other pairs
-/// at least 2.7e-5), so the count is the same at a tolerance of 1e-6.
+/// (1e-6, 1e-5] mean radii for seeds 0-4 (measured: contacts below 1e-7,
+/// other pairs beyond 1e-5), so the count is the same at a tolerance of
+/// 1e-6.
 #[test]
 fn a_jammed_packing_is_isostatic_without_its_rattlers() {
     for seed in SEEDS_32 {
@@ -179,7 +174,7 @@ fn a_jammed_packing_is_isostatic_without_its_rattlers() {
 }
 
 /// (c) Where rho0 is reached, `jam` is `generate`: below jamming, and for
-/// 32 spheres of seed 6, which crystallise into fcc and reach 0.74.
+/// 32 spheres of seed 15, which crystallise into fcc and reach 0.74.
 #[test]
 fn jam_is_generate_when_rho0_is_reached() {
     for s in [
@@ -193,7 +188,7 @@ fn jam_is_generate_when_rho0_is_reached() {
             boundary: Boundary::Die,
             ..jam_spec(12, 1)
         },
-        jam_spec(32, 6),
+        jam_spec(32, 15),
     ] {
         let g = Packing::generate(&s).unwrap();
         assert_eq!(Packing::jam(&s).unwrap(), g, "{s:?}");
@@ -202,8 +197,8 @@ fn jam_is_generate_when_rho0_is_reached() {
 }
 
 /// (d) In a die the jammed particles lie between the walls, both walls
-/// bear contacts, and the density is that of a die (0.568-0.627 measured for
-/// 32 spheres, seeds 0-4: the walls loosen the packing; bound [0.54, 0.66]).
+/// bear contacts, and the density is that of a die (0.541-0.627 measured for
+/// 32 spheres, seeds 0-4: the walls loosen the packing; bound [0.52, 0.66]).
 #[test]
 fn a_jammed_die_packing_lies_between_its_walls() {
     for s in [
@@ -228,7 +223,7 @@ fn a_jammed_die_packing_lies_between_its_walls() {
         check_geometry(&p, &s);
         check_sizes(&p, &s);
         assert!(
-            (0.54..=0.66).contains(&p.rel_density()),
+            (0.52..=0.66).contains(&p.rel_density()),
             "{}",
             p.rel_density()
         );
@@ -241,4 +236,23 @@ fn a_jammed_die_packing_lies_between_its_walls() {
         }
         assert!(p.backbone_coordination_number(CONTACT * s.mean_radius) > 4.0);
     }
+}
+
+/// (e) A jammed packing is that of its first jam, not annealed: 16 spheres
+/// jam in a state of their own for each seed (seeds 0-4: 0.576, 0.588,
+/// 0.591, 0.596 and 0.684, the last partly ordered). Decompressed, shaken
+/// and compressed again up to 20 times, every seed had jammed in one
+/// ordered state at 0.6917 (7 contacts per sphere), and 8 spheres in one
+/// at 0.6443.
+#[test]
+fn a_jammed_packing_is_not_annealed_into_one_state() {
+    let mut densities: Vec<f64> = (0..5)
+        .map(|seed| Packing::jam(&jam_spec(16, seed)).unwrap().rel_density())
+        .collect();
+    println!("16 spheres, seeds 0-4: {densities:?}");
+    densities.sort_by(f64::total_cmp);
+    densities.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
+    assert!(densities.len() >= 4, "{densities:?}");
+    let mean = densities.iter().sum::<f64>() / densities.len() as f64;
+    assert!(mean < 0.66, "{densities:?}");
 }

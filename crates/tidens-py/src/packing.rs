@@ -116,7 +116,7 @@ impl PyPacking {
     /// (what the relaxation can reach depends on the size distribution and
     /// the boundary: about 0.64-0.69 for monodisperse spheres in a periodic
     /// box, less in a die; above it a ValueError says the density reached,
-    /// or jam=True returns that densest packing);
+    /// or jam=True returns the packing where it first jams);
     /// mean_radius_mm: number mean of the volume-equivalent radius
     /// (a^2 c)^(1/3) [mm]; aspect_ratio c/a in [0.2, 5] (c along each
     /// particle's random axis); size_ratio (large/small radius, in (1, 10])
@@ -125,8 +125,9 @@ impl PyPacking {
     /// ln(radius), in (0, 1]) for a lognormal one, neither for monodisperse;
     /// box_aspect: the box's relative side lengths; seed: the same arguments
     /// and seed give the same packing on every machine. Below jamming few
-    /// particles touch. jam: where the packing jams below rho0, the
-    /// densest overlap-free state found instead of the refusal, refined
+    /// particles touch. jam: where the packing jams below rho0, the state
+    /// of its first jam instead of the refusal (not shaken and compressed
+    /// again, which anneals small boxes into ordered states), refined
     /// until touching particles are apart by less than 1e-6 of the mean
     /// radius, the particles' sizes kept and the box scaled to the density
     /// reached (rel_density); frictionless jammed packings are isostatic,
