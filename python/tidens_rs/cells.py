@@ -215,8 +215,9 @@ def random(
     """A random jammed packing of ``particles`` spheres (or spheroids of
     ``aspect_ratio`` c/a, each along a random axis) in a cube periodic along
     x, y and z, as a periodic cell named ``random``: the particles grow
-    toward ``rho0`` and stop where they jam (None: as far as they go, the
-    jammed density, about 0.64 for one size). A packing that reaches
+    toward ``rho0`` and stop where they first jam (None: as far as they go,
+    the jammed density, about 0.60-0.65 for 32 or more spheres of one size;
+    small boxes spread more and can order). A packing that reaches
     ``rho0`` unjammed holds no load (``Case`` refuses it). ``radius_mm`` is
     the mean volume-equivalent radius; ``size_ratio`` (with
     ``small_fraction``, the small particles' share of the number) makes it

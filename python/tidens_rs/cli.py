@@ -118,7 +118,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--periodic", action="store_true", help="the lattice of --cell as whole particles in a periodic box twice the cell's size (sc: one sphere; bcc two, fcc four, sc2 eight), instead of the cell of octants between mirror planes")
     g.add_argument("--particles", type=int, help="--cell random: number of particles, in [1, 10000] (default 16)")
     g.add_argument("--packing-seed", type=int, help="--cell random: seed of the packing, >= 0 (default 0): the same options and seed give the same packing")
-    g.add_argument("--rho0", type=float, help="--cell random: grow the packing toward this relative density and stop where it jams below it (default: the jammed density, about 0.64 for one size)")
+    g.add_argument("--rho0", type=float, help="--cell random: grow the packing toward this relative density and stop where it jams below it (default: where it first jams, about 0.60-0.65 for 32 or more spheres of one size)")
     g.add_argument("--small-fraction", type=float, help="--cell random with --size-ratio: number fraction of the small particles, in [0, 1] (default 0.5)")
     g.add_argument("--cell-file", type=Path, metavar="PATH", help="a cell described in a JSON or TOML file, instead of --cell (schema: python -c 'import tidens_rs.cells as c; help(c)')")
     g.add_argument("--aspect-ratio", type=float, help="spheroid c/a, c along the load (default 1)")
@@ -497,8 +497,8 @@ def _figures(args: argparse.Namespace) -> int:
 
 def _add_pack_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--particles", type=int, required=True, help="number of particles, in [1, 10000]")
-    p.add_argument("--rho0", type=float, help="relative density, in [0.3, 0.74] (default 0.6, with --jam 0.74); monodisperse spheres jam at about 0.64-0.69 in a periodic box, less in a die")
-    p.add_argument("--jam", action="store_true", help="grow toward --rho0 and, where the packing jams below it, keep the densest state (touching particles, about 6 contacts per sphere)")
+    p.add_argument("--rho0", type=float, help="relative density, in [0.3, 0.74] (default 0.6, with --jam 0.74); shaken and compressed again where they jam, monodisperse spheres reach about 0.64-0.69 in a periodic box, less in a die")
+    p.add_argument("--jam", action="store_true", help="grow toward --rho0 and, where the packing jams below it, keep the state where it first jams (touching particles, about 6 contacts per sphere; 32 or more spheres in a periodic box jam at about 0.60-0.65)")
     p.add_argument("--radius", type=float, default=0.05, help="number mean of the volume-equivalent radius [mm] (default 0.05)")
     p.add_argument("--aspect-ratio", type=float, default=1.0, help="spheroid c/a, in [0.2, 5], c along each particle's random axis (default 1)")
     p.add_argument("--size-ratio", type=float, help="bimodal: large over small radius, in (1, 10]")

@@ -113,10 +113,12 @@ pub struct PyPacking {
 #[pymethods]
 impl PyPacking {
     /// A random dense packing. particles in [1, 10000]; rho0 in [0.3, 0.74]
-    /// (what the relaxation can reach depends on the size distribution and
-    /// the boundary: about 0.64-0.69 for monodisperse spheres in a periodic
-    /// box, less in a die; above it a ValueError says the density reached,
-    /// or jam=True returns the packing where it first jams);
+    /// (what the relaxation can reach, shaken and compressed again where it
+    /// jams, depends on the size distribution and the boundary: about
+    /// 0.64-0.69 for monodisperse spheres in a periodic box, less in a die;
+    /// above it a ValueError says the density reached, or jam=True returns
+    /// the packing where it first jams, about 0.60-0.65 for 32 or more
+    /// spheres);
     /// mean_radius_mm: number mean of the volume-equivalent radius
     /// (a^2 c)^(1/3) [mm]; aspect_ratio c/a in [0.2, 5] (c along each
     /// particle's random axis); size_ratio (large/small radius, in (1, 10])
