@@ -297,8 +297,9 @@ pub(crate) fn compress(
     }
     if refine {
         // Locate the jamming point of the first jam's state (the densest
-        // accepted, not shaken) with finer steps and a tighter tolerance, and keep the last jammed state (shrunk until
-        // no overlap is left): its contacts are closed to the final step.
+        // accepted, not shaken) with finer steps and a tighter tolerance,
+        // and keep the last jammed state (shrunk until no overlap is left):
+        // its contacts are closed to the final step.
         let tol = REFINE_TOLERANCE * problem.tolerance;
         c.relaxer.restore(&c.best);
         c.good.clone_from(&c.best);
