@@ -662,9 +662,12 @@ impl PySimulation {
     }
 
     /// Run totals: steps, newton_iterations, rejected_steps, failed_attempts,
-    /// llt_factorizations, lblt_factorizations, evaluations,
-    /// tangent_evaluations (counts), and the wall times evaluation_seconds,
-    /// contact_seconds, assembly_seconds, linear_seconds [s].
+    /// llt_factorizations, lblt_factorizations, pattern_rebuilds (times the
+    /// sparsity pattern grew for new particle contacts, each a symbolic
+    /// factorisation), evaluations, tangent_evaluations (counts), the wall
+    /// times evaluation_seconds, contact_seconds, assembly_seconds,
+    /// linear_seconds [s], and max_drag_share (periodic cells: the largest
+    /// stabilising drag of a step over the piston force).
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let stats = self.progress().stats;
         stats_dict(py, &stats)

@@ -32,6 +32,9 @@ pub struct Assembler {
     /// Equation cliques of the elements (their dofs, plus the piston's
     /// equation where a dof may follow it).
     element_cliques: Vec<Vec<usize>>,
+    /// Equation cliques of the couplings that hold for the whole run (the
+    /// rotation frames of a periodic cell, [`Assembler::add_couplings`]).
+    coupling_cliques: BTreeSet<Vec<usize>>,
     /// Equation cliques of the particle-contact couplings added so far.
     contact_cliques: BTreeSet<Vec<usize>>,
     /// The equation-level system (body dofs, then the piston's equation).
@@ -72,6 +75,7 @@ impl Assembler {
             dof_values: vec![0.0; elements.nnz()],
             elements,
             element_cliques,
+            coupling_cliques: BTreeSet::new(),
             contact_cliques: BTreeSet::new(),
             system: SparseSystem::from_cliques(0, std::iter::empty()),
             own_slot: Vec::new(),
@@ -108,6 +112,7 @@ impl Assembler {
         let cliques = self
             .element_cliques
             .iter()
+            .chain(self.coupling_cliques.iter())
             .chain(self.contact_cliques.iter());
         self.system = SparseSystem::from_cliques(n + 1, cliques.map(|c| c.as_slice()));
         let (col_ptr, row_idx) = (self.elements.col_ptr(), self.elements.row_idx());
@@ -127,8 +132,15 @@ impl Assembler {
     /// Fills the system with the tangents of `eval` through the equation
     /// map `map` (see [`Constraints::equation_map`]); eliminated dofs keep a
     /// unit diagonal. False when a contact term fell outside the pattern
-    /// (grow it with [`Assembler::grow`] and assemble again).
+    /// (grow it with [`Assembler::grow`] and assemble again); the entries
+    /// outside are left out.
     pub fn assemble(&mut self, eval: &Evaluation, map: &[usize]) -> bool {
+        self.assemble_counting(eval, map) == 0
+    }
+
+    /// [`Assembler::assemble`], returning how many entries fell outside
+    /// the pattern.
+    pub fn assemble_counting(&mut self, eval: &Evaluation, map: &[usize]) -> usize {
         self.elements
             .assemble_matrix(eval.body.tangents(), &mut self.dof_values);
         self.system.clear();
@@ -190,7 +202,7 @@ impl Assembler {
                 self.system.add(d, d, 1.0);
             }
         }
-        outside == 0
+        outside
     }
 
     /// Adds the couplings of the contact terms of `contact` to the pattern
@@ -223,8 +235,9 @@ impl Assembler {
         self.pattern_rebuilds += 1;
     }
 
-    /// Adds dense couplings among each set of `dofs` to the pattern (the
-    /// particles' rotation frames of a periodic cell).
+    /// Adds dense couplings among each set of `dofs` to the pattern for
+    /// the whole run (the particles' rotation frames of a periodic cell):
+    /// [`Assembler::forget_contacts`] keeps them.
     pub fn add_couplings(
         &mut self,
         sets: impl IntoIterator<Item = Vec<usize>>,
@@ -233,8 +246,17 @@ impl Assembler {
         for dofs in sets {
             let mut clique = constraints.clique(&dofs);
             clique.sort_unstable();
-            self.contact_cliques.insert(clique);
+            self.coupling_cliques.insert(clique);
         }
+        self.rebuild();
+    }
+
+    /// Drops the couplings grown for particle contacts (and their count),
+    /// keeping the elements' and those of [`Assembler::add_couplings`]: the
+    /// pattern is then the one the run started with.
+    pub fn forget_contacts(&mut self) {
+        self.contact_cliques.clear();
+        self.pattern_rebuilds = 0;
         self.rebuild();
     }
 

@@ -78,6 +78,10 @@ pub enum LinearError {
     /// A right-hand side of the wrong length (a bug of the caller).
     #[error("right-hand side of length {got} for a system of size {size}")]
     Size { got: usize, size: usize },
+    /// Tangent entries that the grown sparsity pattern still lacks (a bug:
+    /// a coupling the pattern was never told of).
+    #[error("{entries} tangent entries fall outside the grown sparsity pattern")]
+    OutsidePattern { entries: usize },
 }
 
 /// Why Newton gave up on one attempt of a step; the step is then cut back,

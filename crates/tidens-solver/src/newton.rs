@@ -476,13 +476,7 @@ impl Simulation {
     /// couplings) and factorises it.
     fn refactor(&mut self, eval: &Evaluation, map: &[usize], dt: f64) -> Result<(), LinearError> {
         let t0 = std::time::Instant::now();
-        if !self.assembler.assemble(eval, map) {
-            if let Some(c) = &self.contact {
-                self.assembler.grow(&eval.contact, c, &self.constraints);
-            }
-            self.linear.reset_pattern();
-            self.assembler.assemble(eval, map);
-        }
+        self.assemble_grown(eval, map)?;
         let t1 = std::time::Instant::now();
         self.stats.assembly_seconds += (t1 - t0).as_secs_f64();
         let factorized = self.linear.factorize(self.assembler.system());

@@ -5,7 +5,8 @@
 
 use crate::assembler::Assembler;
 use crate::constraints::{Constraints, PlaneContactState};
-use crate::error::SolverError;
+use crate::error::{LinearError, SolverError};
+use crate::evaluation::Evaluation;
 use crate::linear::LinearSolver;
 use crate::newton::{FactorKey, Solved};
 use crate::output::{CurvePoint, RunStats, Status};
@@ -761,14 +762,31 @@ impl Simulation {
         let u = self.state.u.clone();
         let eval = self.evaluate(&u, dt, true)?;
         let map = self.constraints.equation_map();
-        if !self.assembler.assemble(&eval, &map) {
-            if let Some(c) = &self.contact {
-                self.assembler.grow(&eval.contact, c, &self.constraints);
-                self.linear.reset_pattern();
-            }
-            self.assembler.assemble(&eval, &map);
-        }
+        self.assemble_grown(&eval, &map)?;
         Ok(self.assembler.system())
+    }
+
+    /// Assembles the tangent of `eval` through the equation map `map`,
+    /// growing the pattern (and so forgetting the symbolic factorisation)
+    /// for particle-contact couplings it lacks. An entry outside the grown
+    /// pattern is an error, not left out: a tangent short of a coupling
+    /// slows Newton down without a trace.
+    pub(crate) fn assemble_grown(
+        &mut self,
+        eval: &Evaluation,
+        map: &[usize],
+    ) -> Result<(), LinearError> {
+        if self.assembler.assemble(eval, map) {
+            return Ok(());
+        }
+        if let Some(c) = &self.contact {
+            self.assembler.grow(&eval.contact, c, &self.constraints);
+        }
+        self.linear.reset_pattern();
+        match self.assembler.assemble_counting(eval, map) {
+            0 => Ok(()),
+            entries => Err(LinearError::OutsidePattern { entries }),
+        }
     }
 }
 

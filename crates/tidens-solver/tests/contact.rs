@@ -454,9 +454,8 @@ fn time_at_density(curve: &[tidens_solver::CurvePoint], rho: f64) -> f64 {
 /// is; its mesh is the octant's mirrored eight times, so the two differ
 /// only in how the contacts are held (the octant's on rigid mirror planes,
 /// the sphere's on its periodic images by the penalty contact) and in the
-/// steps taken. Measured at level 1 to rho = 0.6: t(0.6) 13.60 s against
-/// 13.63 s (0.20 %), in 70 steps and 286 Newton iterations (68 and 246
-/// with the rotation hold uncapped), this test 24 s.
+/// steps taken. Measured at level 1 to rho = 0.6: t(0.6) 13.59 s against
+/// 13.63 s (0.28 %), in 68 steps and 256 Newton iterations.
 /// Without the hold on the sphere's rotation (the drag alone) t(0.6) was
 /// 13.11 s (3.8 % off) and this test took 320 s; with the hold ten times
 /// weaker it failed at rho = 0.567.
