@@ -235,27 +235,7 @@ mod tests {
     /// hold's coupling out.)
     #[test]
     fn forgetting_the_caches_keeps_the_rotation_hold_in_the_tangent() {
-        use crate::{LoadHistory, MeshOptions, Preset, Scene};
-        let r = 0.05;
-        let sphere = crate::PlacedSpheroid {
-            centre: [r; 3],
-            a: r,
-            c: r,
-            axis: [0.31, 0.17, 1.0],
-        };
-        let options = MeshOptions {
-            level: 1,
-            grading: 1.0,
-            exact_volume: false,
-        };
-        let scene = Scene::periodic([2.0 * r; 3], &[sphere], &options).unwrap();
-        let mut settings = Settings::new(LoadHistory {
-            stress: 10.0,
-            knockdown: 1.0,
-            ramp_time: 1.0,
-        });
-        settings.until_time = Some(1.0);
-        let mut sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
+        let mut sim = crate::test_support::periodic_sphere_level1(|s| s.until_time = Some(1.0));
         for _ in 0..3 {
             sim.advance().unwrap();
         }

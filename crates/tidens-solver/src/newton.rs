@@ -880,18 +880,20 @@ mod tests {
         assert!((w[0] * g(t0) + w[1] * g(t1) + w[2] * g(t2) - g(t)).abs() > 1e-3);
     }
 
-    /// The assembled system is the derivative of the residual: for the bcc
-    /// cell during the ramp (particle contact pressed, plastic flow near the
-    /// contact), `K v` equals central differences of the residual along `v`
-    /// over the free equations and the piston.
-    #[test]
-    fn assembled_tangent_equals_finite_differences_of_the_residual() {
-        let mut sim = crate::test_support::bcc_level1(|s| {
-            s.until_time = Some(0.2);
-            s.newton.consistent_tangent = true;
-        });
-        sim.run(|_| true).unwrap();
-        let dt = 0.05;
+    /// The largest difference between `K v` and central differences of the
+    /// residual along a smooth `v` (over the free equations and the
+    /// piston) at `sim`'s last state for a step `dt`, and the size of
+    /// `K v`; with the evaluation, equation map and system it was found at.
+    fn tangent_mismatch(
+        sim: &mut crate::Simulation,
+        dt: f64,
+    ) -> (
+        f64,
+        f64,
+        crate::evaluation::Evaluation,
+        Vec<usize>,
+        tidens_fem::SparseSystem,
+    ) {
         let force = sim.full_force * sim.settings.load.factor(sim.state.time + dt);
         let (u0, piston0) = (sim.state.u.clone(), sim.state.piston);
         let x = sim.current_coordinates(&u0);
@@ -899,10 +901,9 @@ mod tests {
         let map = sim.constraints.equation_map();
         let eval = sim.evaluate(&u0, dt, true).unwrap();
         assert!(eval.contact.terms.iter().any(|t| t.pressure > 0.0));
-        assert!(sim.assembler.assemble(&eval, &map));
+        sim.assemble_grown(&eval, &map).unwrap();
         let k = sim.assembler.system().clone();
         let n = sim.constraints.dof_count();
-        // A smooth direction over the free equations and the piston.
         let v: Vec<f64> = (0..=n)
             .map(|e| {
                 if e == n || map.get(e) == Some(&e) {
@@ -929,6 +930,22 @@ mod tests {
             let fd = (rp[e] - rm[e]) / (2.0 * h);
             worst = worst.max((fd - kv[e]).abs());
         }
+        (worst, scale, eval, map, k)
+    }
+
+    /// The assembled system is the derivative of the residual: for the bcc
+    /// cell during the ramp (particle contact pressed, plastic flow near the
+    /// contact), `K v` equals central differences of the residual along `v`
+    /// over the free equations and the piston.
+    #[test]
+    fn assembled_tangent_equals_finite_differences_of_the_residual() {
+        let mut sim = crate::test_support::bcc_level1(|s| {
+            s.until_time = Some(0.2);
+            s.newton.consistent_tangent = true;
+        });
+        sim.run(|_| true).unwrap();
+        let n = sim.constraints.dof_count();
+        let (worst, scale, eval, map, k) = tangent_mismatch(&mut sim, 0.05);
         assert!(
             worst < 1e-5 * scale,
             "K v off the differences by {worst:e} (scale {scale:e})"
@@ -955,5 +972,23 @@ mod tests {
             let size = b.iter().fold(0.0f64, |m, y| m.max(y.abs()));
             assert!(diff <= 1e-12 * size, "grown system off by {diff:e}");
         }
+    }
+
+    /// The same for a periodic cell, whose residual also holds the drag on
+    /// each node and the hold on each particle's rotation: one sphere
+    /// touching its images, during the ramp.
+    #[test]
+    fn a_periodic_cells_tangent_with_its_drag_and_hold_equals_finite_differences() {
+        let mut sim = crate::test_support::periodic_sphere_level1(|s| {
+            s.until_time = Some(0.1);
+            s.newton.consistent_tangent = true;
+        });
+        sim.run(|_| true).unwrap();
+        let (worst, scale, eval, _, _) = tangent_mismatch(&mut sim, 0.05);
+        assert!(!eval.rotation_tangents.is_empty(), "the hold acts");
+        assert!(
+            worst < 1e-5 * scale,
+            "K v off the differences by {worst:e} (scale {scale:e})"
+        );
     }
 }

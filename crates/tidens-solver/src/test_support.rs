@@ -18,3 +18,30 @@ pub(crate) fn bcc_level1(adjust: impl FnOnce(&mut Settings)) -> Simulation {
     adjust(&mut settings);
     Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap()
 }
+
+/// One sphere (radius 0.05 mm, its axis tilted off z) in a periodic cube
+/// of twice its radius, touching its six images: the sc lattice as a
+/// periodic cell at level 1, Ti-6Al-4V at 1293 K, 10 MPa ramped over 1 s,
+/// with `adjust` applied to the settings.
+pub(crate) fn periodic_sphere_level1(adjust: impl FnOnce(&mut Settings)) -> Simulation {
+    let r = 0.05;
+    let sphere = crate::PlacedSpheroid {
+        centre: [r; 3],
+        a: r,
+        c: r,
+        axis: [0.31, 0.17, 1.0],
+    };
+    let options = MeshOptions {
+        level: 1,
+        grading: 1.0,
+        exact_volume: false,
+    };
+    let scene = Scene::periodic([2.0 * r; 3], &[sphere], &options).unwrap();
+    let mut settings = Settings::new(LoadHistory {
+        stress: 10.0,
+        knockdown: 1.0,
+        ramp_time: 1.0,
+    });
+    adjust(&mut settings);
+    Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap()
+}
