@@ -127,3 +127,32 @@ def test_the_aspect_ratio_figure_end_to_end(tmp_path: Path) -> None:
     again = figures.make(tmp_path, level=1, figures=["aspect_ratio"], workers=1)
     stamps = {r["name"]: json.loads((Path(r["folder"]) / "summary.json").read_text())["wall_seconds"] for r in again.runs}
     assert stamps == {r["name"]: r["wall_seconds"] for r in made.runs}
+
+
+def test_the_random_packings_figure_plans_its_packings_first_and_draws_their_contacts(tmp_path: Path) -> None:
+    runs = figures.plan(level=2, figures=["random_packings"])
+    mono, bimodal = figures.random_job_name(None), figures.random_job_name(figures.RANDOM_BIMODAL)
+    lattices = [figures.job_name(c, figures.CREEP, 10.0, level=figures.RANDOM_LEVEL) for c in figures.RANDOM_LATTICES]
+    assert set(runs.jobs) == {mono, bimodal, *lattices}
+    for name in (mono, bimodal):
+        cell = runs.jobs[name].case.cell
+        assert cell.is_periodic and len(cell.particles) == figures.RANDOM_PARTICLES
+        assert runs.jobs[name].case.solver.mesh_level == figures.RANDOM_LEVEL
+    radii = {p[1] for p in runs.jobs[bimodal].case.cell.particles}
+    assert max(radii) / min(radii) == pytest.approx(figures.RANDOM_BIMODAL[0], rel=1e-12)
+    # The packings, hours long, start first.
+    order = [j.name for j in sorted(runs.jobs.values(), key=figures._cost, reverse=True)]
+    assert set(order[:2]) == {mono, bimodal}
+    # Drawn with the periodic sc lattice (one whole sphere, six contacts)
+    # standing in for a random packing: its contacts and the model's times.
+    case = td.Case(cell=td.cells.as_periodic(td.cells.sc()), material=BASE, stress_mpa=10.0,
+                   solver=td.SolverSettings(mesh_level=1))
+    stand_in = case.run(0.53, error_estimate=False)
+    runs.results[mono] = stand_in
+    files, caption, _ = figures._random_packings(runs, tmp_path)
+    assert (tmp_path / "random_packings.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and len(files) == 2
+    row = next(line for line in caption.splitlines() if line.startswith("| random, one size"))
+    s = stand_in.summary()
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells[1:6] == ["1", f"{stand_in.rho0:.4f}", "6.00", "6.00", "reached_density"]
+    assert cells[10] == f"{s['continuum_times_to_density_s']['0.8']:.1f} s"

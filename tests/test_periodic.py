@@ -9,10 +9,12 @@ import re
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 import tidens_rs as td
 from tidens_rs.cli import main
+from tidens_rs.io import read_curve
 
 # Each lattice: whole particles in the doubled box, and its coordination
 # number (sc 6 neighbours, bcc 8, fcc 12; rock salt: each sphere touches
@@ -103,6 +105,17 @@ def test_the_periodic_sc_lattice_runs_from_the_command_line(tmp_path: Path) -> N
     # The whole sphere's mesh has the octant's volume deficit (surface nodes
     # on the sphere), eight times over: rho0 below pi/6.
     assert s["rho0"] < math.pi / 6 and s["final_density"] >= 0.53
+    # Pressed, the sphere touches its six images, as the geometry said; the
+    # curve follows the count from 0 at the start, written as a column.
+    assert s["final_coordination_number"] == 6.0
+    curve = read_curve(out / "curve.csv")
+    assert curve["coordination_number"][0] == 0.0 and curve["coordination_number"][-1] == 6.0
+
+
+def test_cells_of_octants_have_no_coordination_number(quick_case: td.Case) -> None:
+    r = quick_case.run(0.53, error_estimate=False)
+    assert np.isnan(r.curve["coordination_number"]).all()
+    assert np.isnan(r.summary()["final_coordination_number"])
 
 
 @pytest.mark.parametrize(

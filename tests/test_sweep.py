@@ -73,7 +73,7 @@ def test_a_restarted_sweep_resumes_an_interrupted_point_and_skips_finished_ones(
     # The resumed curve is the uninterrupted one, to the bit.
     whole = base().run(until_density=UNTIL, out_dir=tmp_path / "whole", error_estimate=False)
     resumed = np.loadtxt(folder / "curve.csv", delimiter=",", skiprows=1)
-    assert np.array_equal(resumed, np.loadtxt(tmp_path / "whole" / "curve.csv", delimiter=",", skiprows=1))
+    assert np.array_equal(resumed, np.loadtxt(tmp_path / "whole" / "curve.csv", delimiter=",", skiprows=1), equal_nan=True)
     assert row["t_0.7_s"] == whole.time_to_density(0.7)
     # Run again: the finished point is not run again.
     stamp = (folder / "summary.json").stat().st_mtime_ns

@@ -478,7 +478,7 @@ def _add_figures_options(p: argparse.ArgumentParser) -> None:
 
     p.add_argument("--out", type=_folder, required=True, help="folder of the figures (PNG, PDF, captions.md, findings.md) and of their runs (runs/); a second call into it runs only what is missing")
     p.add_argument("--level", type=int, default=2, help="mesh level of the runs, each at its accuracy-ladder tolerance 0.02 * 2^(3 - level) (default 2; the mesh study adds levels 1 to 3)")
-    p.add_argument("--only", type=_name_list(figures.FIGURES), default=list(figures.FIGURES), help=f"comma-separated figures among {', '.join(figures.FIGURES)} (default all)")
+    p.add_argument("--only", type=_name_list(figures.FIGURES), default=list(figures.DEFAULT_FIGURES), help=f"comma-separated figures among {', '.join(figures.FIGURES)} (default all but random_packings, whose runs take hours)")
     p.add_argument("--workers", type=int, help="worker processes, one run and one thread each (default: the cores)")
     p.add_argument("--quiet", action="store_true", help="no progress")
 

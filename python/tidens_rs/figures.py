@@ -22,7 +22,14 @@ into the same folder runs only what is missing) and draws, as PNG and PDF:
 - ``contours``: von Mises stress on the deformed particles of each cell at
   rho = 0.8, 0.9 and 0.95;
 - ``mesh_study``: sc and bcc at mesh levels 1, 2 and 3, with the estimated
-  error against the run time.
+  error against the run time;
+- ``random_packings``: random jammed packings of 32 whole spheres in a
+  periodic box, of one size and of two (radius ratio 1.566, half of them
+  small), Ti-6Al-4V creep at 10 MPa, beside the sc, bcc and fcc cells and
+  the continuum model, and their coordination number against density
+  (mesh level 1, the coarsest, whatever the level asked for). Its runs take
+  hours, so it is made only when asked for by name (not one of
+  :data:`DEFAULT_FIGURES`).
 
 Every curve carries its estimated error as a band: a computed curve the
 estimate of its run (coarse companion and time control, see
@@ -63,7 +70,11 @@ if TYPE_CHECKING:
 
 FloatArray = npt.NDArray[np.float64]
 
-FIGURES: tuple[str, ...] = ("ti64_cells", "cpti", "aspect_ratio", "master_curve", "contours", "mesh_study")
+FIGURES: tuple[str, ...] = ("ti64_cells", "cpti", "aspect_ratio", "master_curve", "contours", "mesh_study",
+                            "random_packings")
+# What ``tidens figures`` makes unless told: all but the random packings,
+# whose runs take hours (``--only random_packings``).
+DEFAULT_FIGURES: tuple[str, ...] = FIGURES[:-1]
 CELLS: tuple[str, ...] = ("sc", "sc2", "bcc", "fcc")
 CELL_LABELS = {"sc": "sc", "sc2": "sc-2", "bcc": "bcc", "fcc": "fcc"}
 # Every run stops at this density (or at the time limit below).
@@ -81,6 +92,16 @@ ASPECT_STRESS_MPA = 15.0
 STUDY_CELLS: tuple[str, ...] = ("sc", "bcc")
 STUDY_LEVELS: tuple[int, ...] = (1, 2, 3)
 STUDY_STRESS_MPA = 10.0
+# The random packings: whole spheres in a periodic box, jammed by the
+# packing generator from this seed; of one size, and bimodal (radius ratio,
+# fraction of small particles by number).
+RANDOM_PARTICLES = 32
+RANDOM_SEED = 0
+RANDOM_BIMODAL: tuple[float, float] = (1.566, 0.5)
+# Their mesh level, whatever the figures' level (32 particles at level 1
+# are 144094 unknowns), and the lattice cells drawn beside them.
+RANDOM_LEVEL = 1
+RANDOM_LATTICES: tuple[str, ...] = ("sc", "bcc", "fcc")
 CPTI_ALPHA_KNOCKDOWN = 0.17
 # (preset, stress [MPa], knock-down, computed): the paper's CP-Ti conditions.
 CPTI_CASES: tuple[tuple[str, float, float, bool], ...] = (
@@ -188,11 +209,31 @@ class Runs:
         self.jobs[name] = Job(name, case, shots)
         return name
 
+    def want_random(self, bimodal: tuple[float, float] | None) -> str:
+        """The random packing of the ``random_packings`` figure: of one
+        size, or bimodal (radius ratio, fraction of small particles)."""
+        name = random_job_name(bimodal)
+        kw = {} if bimodal is None else {"size_ratio": bimodal[0], "small_fraction": bimodal[1]}
+        case = Case(
+            cell=cells_module.random(RANDOM_PARTICLES, seed=RANDOM_SEED, **kw),
+            material=presets.by_name(CREEP),
+            stress_mpa=STUDY_STRESS_MPA,
+            solver=SolverSettings(mesh_level=RANDOM_LEVEL, tolerance=accuracy_ladder_tolerance(RANDOM_LEVEL)),
+        )
+        self.jobs[name] = Job(name, case)
+        return name
+
     def result(self, name: str) -> Result | None:
         return self.results.get(name)
 
 
-def plan(level: int = 2, figures: Sequence[str] = FIGURES) -> Runs:
+def random_job_name(bimodal: tuple[float, float] | None) -> str:
+    """The folder name of a random packing of the figures."""
+    sizes = "" if bimodal is None else f"-bimodal{bimodal[0]:g}x{bimodal[1]:g}"
+    return f"random{RANDOM_PARTICLES}-s{RANDOM_SEED}{sizes}-{CREEP}-{STUDY_STRESS_MPA:g}MPa-L{RANDOM_LEVEL}"
+
+
+def plan(level: int = 2, figures: Sequence[str] = DEFAULT_FIGURES) -> Runs:
     """The runs that ``figures`` need at mesh ``level``."""
     runs = Runs(level)
     for fig in figures:
@@ -220,6 +261,11 @@ def plan(level: int = 2, figures: Sequence[str] = FIGURES) -> Runs:
             for cell in STUDY_CELLS:
                 for lvl in STUDY_LEVELS:
                     runs.want(cell, CREEP, STUDY_STRESS_MPA, level=lvl)
+        elif fig == "random_packings":
+            for bimodal in (None, RANDOM_BIMODAL):
+                runs.want_random(bimodal)
+            for cell in RANDOM_LATTICES:
+                runs.want(cell, CREEP, STUDY_STRESS_MPA, level=RANDOM_LEVEL)
         else:
             raise ValueError(f"figures: {fig!r} is not one of {', '.join(FIGURES)}")
     return runs
@@ -231,14 +277,16 @@ _CELL_COST = {"sc": 1.0, "bcc": 6.0, "fcc": 12.0, "sc2": 30.0}
 
 def _cost(job: Job) -> float:
     c = job.case
-    return _CELL_COST.get(c.cell.name, 10.0) * 4.0 ** c.solver.mesh_level * (1.0 if c.material.creep_n > 1.0 else 0.6)
+    # A whole particle's contacts cost as much as several levels of mesh.
+    cell = 1e4 * len(c.cell.particles) if c.cell.is_periodic else _CELL_COST.get(c.cell.name, 10.0)
+    return cell * 4.0 ** c.solver.mesh_level * (1.0 if c.material.creep_n > 1.0 else 0.6)
 
 
 def make(
     out_dir: str | Path,
     *,
     level: int = 2,
-    figures: Sequence[str] = FIGURES,
+    figures: Sequence[str] = DEFAULT_FIGURES,
     workers: int | None = None,
     progress: bool = False,
     log: Callable[[str], None] | None = None,
@@ -282,6 +330,7 @@ def make(
         "master_curve": _master_curve,
         "contours": _contours,
         "mesh_study": _mesh_study,
+        "random_packings": _random_packings,
     }
     for fig in figures:
         files, caption, found = drawers[fig](runs, out)
@@ -910,6 +959,73 @@ def _mesh_study(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str, 
         "coarse companion; level 1 has none, so only its time error is known and it is not drawn).\n\n"
         "| cell | level | dofs | wall [s] | " + " | ".join(f"error t({m:g})" for m in STUDY_DENSITIES) + " |\n"
         "|---|---|---|---|" + "---|" * len(STUDY_DENSITIES) + "\n" + table + "\n"
+    )
+    return files, caption, []
+
+
+def _random_packings(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str, Any]]]:
+    fig, axes = _figure(1, 2, width=5.0)
+    ax, zax = axes[0][0], axes[0][1]
+    rows = []
+    for k, bimodal in enumerate((None, RANDOM_BIMODAL)):
+        r = runs.result(random_job_name(bimodal))
+        if r is None:
+            continue
+        label = "random, one size" if bimodal is None else f"random, radii {bimodal[0]:g}:1"
+        color = f"C{k}"
+        _plot(ax, computed(r), color, f"{label}, rho0 {r.rho0:.3f}")
+        t_model, rho_model = continuum_curve(r)
+        ax.plot(t_model, rho_model, ":", color=color, lw=1.0, label=f"continuum model from rho0 {r.case.cell.rho0:.3f}")
+        z = r.curve.get("coordination_number")
+        if z is not None:
+            pressed = np.isfinite(z) & (z > 0.0)
+            zax.plot(r.rel_density[pressed], z[pressed], color=color, label=label)
+        rows.append((label, r))
+    for k, cell in enumerate(RANDOM_LATTICES):
+        r = runs.result(job_name(cell, CREEP, STUDY_STRESS_MPA, level=RANDOM_LEVEL))
+        if r is not None:
+            _plot(ax, computed(r), f"C{k + 2}", f"{CELL_LABELS[cell]} cell", style="--")
+    if not rows:
+        _missing(zax, "random packings")
+    _density_axes(ax, f"Ti-6Al-4V creep, {STUDY_STRESS_MPA:g} MPa, mesh level {RANDOM_LEVEL}")
+    ax.legend(fontsize=7, loc="upper left")
+    zax.set_xlabel("relative density")
+    zax.set_ylabel("coordination number (contacts per particle)")
+    zax.set_title("random packings: contacts pressed", fontsize=10)
+    zax.grid(True, alpha=0.3)
+    if rows:
+        zax.legend(fontsize=8, loc="upper left")
+    files = _save(fig, out, "random_packings")
+    marks = (0.8, 0.9, 0.95)
+
+    def row(label: str, r: Result) -> str:
+        s = r.summary()
+        times = " | ".join(_seconds(r.time_to_density(m)) for m in marks)
+        model = " | ".join(_seconds(s["continuum_times_to_density_s"].get(f"{m:g}")) for m in marks)
+        z_end = s.get("final_coordination_number")
+        return (
+            f"| {label} | {s['particles']} | {r.rho0:.4f} | {s['coordination_number']:.2f} | "
+            f"{'-' if z_end is None or not math.isfinite(z_end) else f'{z_end:.2f}'} | {r.status} | "
+            f"{s['final_density']:.4f} | {times} | {model} | {_seconds(float(r.curve['time_error_s'][-1]))} | "
+            f"{_seconds(r.wall_seconds)} |"
+        )
+
+    caption = (
+        "## random_packings\n\n"
+        f"Random jammed packings of {RANDOM_PARTICLES} whole spheres in a box periodic along x, y and z "
+        f"(`tidens_rs.cells.random`, seed {RANDOM_SEED}): of one size, and of two (radius ratio "
+        f"{RANDOM_BIMODAL[0]:g}, a fraction {RANDOM_BIMODAL[1]:g} of them small), Ti-6Al-4V creep at "
+        f"{STUDY_STRESS_MPA:g} MPa, mesh level {RANDOM_LEVEL} (the coarsest, so the bands are the time "
+        "control's error only), beside the sc, bcc and fcc cells at the same level (dashed) and the "
+        "continuum model from each packing's rho0 (dotted). Right: the coordination number as the "
+        "contacts press (pairs of particles pressed together, a particle and a periodic image of one "
+        "counting as a pair, twice over the particles).\n\n"
+        "| packing | particles | rho0 | Z at the start (geometry) | Z at the end (pressed) | status | final rho | "
+        + " | ".join(f"t({m:g})" for m in marks) + " | "
+        + " | ".join(f"continuum t({m:g})" for m in marks)
+        + " | time error at the end | wall |\n"
+        "|---|---|---|---|---|---|---|" + "---|" * (2 * len(marks)) + "---|---|\n"
+        + "\n".join(row(label, r) for label, r in rows) + "\n"
     )
     return files, caption, []
 

@@ -35,6 +35,7 @@ CURVE_COLUMNS = (
     "particle_contacts",
     "max_penetration_mm",
     "max_depth_mm",
+    "coordination_number",
 )
 
 

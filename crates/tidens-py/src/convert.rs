@@ -23,7 +23,7 @@ impl Value {
 }
 
 /// Number of entries of a curve point.
-const POINT_LEN: usize = 16;
+const POINT_LEN: usize = 17;
 
 /// The entries of a curve point, in one place for `advance()` and `curve()`.
 fn point_entries(p: &CurvePoint) -> [(&'static str, Value); POINT_LEN] {
@@ -45,6 +45,7 @@ fn point_entries(p: &CurvePoint) -> [(&'static str, Value); POINT_LEN] {
         ("particle_contacts", Count(p.particle_contacts)),
         ("max_penetration_mm", Float(p.max_penetration)),
         ("max_depth_mm", Float(p.max_depth)),
+        ("coordination_number", Float(p.coordination_number)),
     ]
 }
 
@@ -188,6 +189,7 @@ mod tests {
             particle_contacts: 0,
             max_penetration: 0.0,
             max_depth: 0.0,
+            coordination_number: f64::NAN,
         }
     }
 

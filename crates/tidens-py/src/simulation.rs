@@ -560,7 +560,10 @@ impl PySimulation {
     /// particle_contacts (nodes pressed on another particle), max_penetration_mm
     /// (into a plane, or into a particle through a node's link to a facet),
     /// max_depth_mm (of any surface node inside another particle, linked or
-    /// not).
+    /// not), coordination_number (periodic cells: contacts per particle,
+    /// twice the pairs of particles, or of a particle and another's or its
+    /// own periodic image, pressed together, over the particles; NaN for
+    /// cells of octants).
     /// Once stopped, returns the last point again. Raises ConvergenceError if
     /// the step fails; the state stays at the last converged step.
     fn advance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {

@@ -50,6 +50,44 @@ pub struct CurvePoint {
     /// that no link measures has gone in.
     #[serde(default)]
     pub max_depth: f64,
+    /// Periodic cells: the mean number of contacts of a particle (the
+    /// coordination number Z), twice the number of contacts over the
+    /// number of particles. A contact is a pair of particles, or of a
+    /// particle and a periodic image of one (so a particle touching the
+    /// same neighbour across two box faces has two), with at least one
+    /// node of either pressed on the other. NaN for other cells, whose
+    /// particles are parts of spheroids.
+    #[serde(default = "not_a_number")]
+    pub coordination_number: f64,
+}
+
+fn not_a_number() -> f64 {
+    f64::NAN
+}
+
+/// The contacts among `particles` whole particles of a periodic cell: the
+/// distinct pairs, each as (particle, particle, periods of the second
+/// relative to the first) with the first particle not after the second
+/// (and, for a particle and its own image, the periods not negative), of
+/// the surfaces of `pairs` (slave, master surface), surface `k` being
+/// `surface_particles[k]`'s particle moved by its periods.
+pub(crate) fn contact_pairs(
+    pairs: impl IntoIterator<Item = (usize, usize)>,
+    surface_particles: &[(usize, [i8; 3])],
+) -> std::collections::BTreeSet<(usize, usize, [i8; 3])> {
+    pairs
+        .into_iter()
+        .map(|(s, m)| {
+            let ((a, pa), (b, pb)) = (surface_particles[s], surface_particles[m]);
+            let periods: [i8; 3] = std::array::from_fn(|i| pb[i] - pa[i]);
+            let back = periods.map(|p| -p);
+            if a < b || (a == b && periods >= back) {
+                (a, b, periods)
+            } else {
+                (b, a, back)
+            }
+        })
+        .collect()
 }
 
 /// Why a run stopped, or that it goes on.
@@ -157,6 +195,23 @@ impl Simulation {
                 .map(|t| (t.slave, t.master.0))
                 .collect::<std::collections::BTreeSet<_>>()
                 .len(),
+            coordination_number: if self.surface_particles.is_empty() {
+                f64::NAN
+            } else {
+                let particles = self
+                    .surface_particles
+                    .iter()
+                    .filter(|p| p.1 == [0; 3])
+                    .count();
+                let pressed = state
+                    .contact
+                    .terms
+                    .iter()
+                    .filter(|t| t.pressure > 0.0)
+                    .map(|t| (t.slave.0, t.master.0));
+                2.0 * contact_pairs(pressed, &self.surface_particles).len() as f64
+                    / particles as f64
+            },
             max_penetration: self
                 .constraints
                 .max_penetration(&state.u, state.piston)
@@ -218,5 +273,39 @@ impl Simulation {
             cell_type: self.body.kind().vtk_name(),
             element: state.fields.clone(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::contact_pairs;
+
+    /// Both passes of a contact, and a particle's contacts with its own
+    /// image seen from either side, are one contact each.
+    #[test]
+    fn a_contact_is_counted_once_whichever_side_presses() {
+        // Surfaces: particles 0 and 1, then 1 moved by +x, 0 moved by +x
+        // and by -x.
+        let surfaces = [
+            (0, [0, 0, 0]),
+            (1, [0, 0, 0]),
+            (1, [1, 0, 0]),
+            (0, [1, 0, 0]),
+            (0, [-1, 0, 0]),
+        ];
+        let pairs = contact_pairs(
+            [
+                (0, 1),
+                (1, 0),
+                (0, 2),
+                // 1 on the image of 0 at -x is 0 on the image of 1 at +x.
+                (1, 4),
+                (0, 3),
+                (0, 4),
+            ],
+            &surfaces,
+        );
+        let expected = [(0, 0, [1, 0, 0]), (0, 1, [0, 0, 0]), (0, 1, [1, 0, 0])];
+        assert_eq!(pairs.into_iter().collect::<Vec<_>>(), expected);
     }
 }

@@ -84,6 +84,10 @@ pub struct Simulation {
     pub(crate) penetration_tol: f64,
     /// The drag that holds the particles of a periodic cell.
     pub(crate) stabilisation: Option<crate::evaluation::Stabilisation>,
+    /// Periodic cells: the particle of each contact surface and the periods
+    /// it is moved by (the particles first, unmoved, then their images);
+    /// empty for other cells.
+    pub(crate) surface_particles: Vec<(usize, [i8; 3])>,
 }
 
 /// Contact between the particles of `scene`, when it has more than one: the
@@ -413,6 +417,12 @@ impl Simulation {
             contact,
             penetration_tol,
             stabilisation,
+            surface_particles: scene.periodic.as_ref().map_or(Vec::new(), |periodic| {
+                (0..scene.particles.len())
+                    .map(|k| (k, [0; 3]))
+                    .chain(periodic.images.iter().map(|im| (im.particle, im.periods)))
+                    .collect()
+            }),
         };
         let point = sim.curve_point(volume, 0, 0, 0.0, 0.0);
         sim.curve.push(point);

@@ -522,6 +522,10 @@ fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell() {
     assert!((t_p / t_o - 1.0).abs() < 0.01, "t(0.6) {t_p} against {t_o}");
     let last = periodic_curve.last().unwrap();
     assert!(last.max_depth < 1e-4 * r, "{}", last.max_depth);
+    // The sphere presses on its six neighbours (its images): the sc
+    // lattice's coordination number.
+    assert_eq!(last.coordination_number, 6.0);
+    assert!(octant_curve.iter().all(|p| p.coordination_number.is_nan()));
     eprintln!(
         "t(0.6) {t_p:.4} s against {t_o:.4} s; {} steps, {} Newton iterations, drag share {:.3e}",
         stats.steps, stats.newton_iterations, stats.max_drag_share
@@ -531,7 +535,9 @@ fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell() {
 /// Two whole spheres of the bcc lattice in a periodic cube touch on the
 /// body diagonals, each the other's periodic images, where the octant
 /// cell's particles touch each other through its mirror planes; the
-/// curves agree within the contact discretisation. Measured at level 1 to
+/// curves agree within the contact discretisation. Measured at level 1:
+/// the coordination number went from 8 to 10 between rho = 0.7668 and
+/// 0.7698 (the height shrunk by 13.2 %). Measured at level 1 to
 /// rho = 0.8 (hold capped at 0.1 E R): t(0.7), t(0.75), t(0.8) = 0.276,
 /// 1.616, 10.56 s against the octant cell's 0.273, 1.620, 10.41 s. With the
 /// hold uncapped this run failed at t = 2.61 s, rho = 0.774 (checked).
@@ -561,6 +567,29 @@ fn two_whole_spheres_in_a_periodic_cube_densify_as_the_bcc_octant_cell() {
     }
     let last = periodic_curve.last().unwrap();
     assert!(last.max_depth < 1e-4 * 0.05, "{}", last.max_depth);
+    // Each sphere presses on its eight nearest neighbours (the other
+    // sphere and its images): the bcc lattice's coordination number. Its
+    // two next nearest along the pressing axis (its own images at +-z, a
+    // cube edge away) touch it once the height has shrunk by the gap
+    // between them, 1 - sqrt(3)/2 = 13.4 % of the edge (a little less:
+    // the spheres bulge where they are pressed): then ten.
+    let height = 2.0 * cell.lengths[2];
+    let mut eight = 0;
+    for p in periodic_curve
+        .iter()
+        .filter(|p| p.coordination_number != 0.0)
+    {
+        let strain = -p.piston_displacement / height;
+        if p.coordination_number == 8.0 {
+            eight += 1;
+            assert!(strain < 1.0 - 0.75f64.sqrt(), "Z 8 at strain {strain}");
+        } else {
+            assert_eq!(p.coordination_number, 10.0);
+            assert!(strain > 0.12, "Z 10 at strain {strain}");
+        }
+    }
+    assert!(eight > 10, "{eight} points with Z = 8");
+    assert_eq!(last.coordination_number, 10.0);
     eprintln!(
         "{} steps, {} Newton iterations, drag share {:.3e}",
         stats.steps, stats.newton_iterations, stats.max_drag_share
