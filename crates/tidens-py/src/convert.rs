@@ -45,7 +45,11 @@ fn point_entries(p: &CurvePoint) -> [(&'static str, Value); POINT_LEN] {
         ("particle_contacts", Count(p.particle_contacts)),
         ("max_penetration_mm", Float(p.max_penetration)),
         ("max_depth_mm", Float(p.max_depth)),
-        ("coordination_number", Float(p.coordination_number)),
+        // NaN for cells of octants (None).
+        (
+            "coordination_number",
+            Float(p.coordination_number.unwrap_or(f64::NAN)),
+        ),
     ]
 }
 
@@ -189,7 +193,7 @@ mod tests {
             particle_contacts: 0,
             max_penetration: 0.0,
             max_depth: 0.0,
-            coordination_number: f64::NAN,
+            coordination_number: None,
         }
     }
 

@@ -55,14 +55,10 @@ pub struct CurvePoint {
     /// number of particles. A contact is a pair of particles, or of a
     /// particle and a periodic image of one (so a particle touching the
     /// same neighbour across two box faces has two), with at least one
-    /// node of either pressed on the other. NaN for other cells, whose
+    /// node of either pressed on the other. None for other cells, whose
     /// particles are parts of spheroids.
-    #[serde(default = "not_a_number")]
-    pub coordination_number: f64,
-}
-
-fn not_a_number() -> f64 {
-    f64::NAN
+    #[serde(default)]
+    pub coordination_number: Option<f64>,
 }
 
 /// The contacts among `particles` whole particles of a periodic cell: the
@@ -195,9 +191,7 @@ impl Simulation {
                 .map(|t| (t.slave, t.master.0))
                 .collect::<std::collections::BTreeSet<_>>()
                 .len(),
-            coordination_number: if self.surface_particles.is_empty() {
-                f64::NAN
-            } else {
+            coordination_number: (!self.surface_particles.is_empty()).then(|| {
                 let particles = self
                     .surface_particles
                     .iter()
@@ -211,7 +205,7 @@ impl Simulation {
                     .map(|t| (t.slave.0, t.master.0));
                 2.0 * contact_pairs(pressed, &self.surface_particles).len() as f64
                     / particles as f64
-            },
+            }),
             max_penetration: self
                 .constraints
                 .max_penetration(&state.u, state.piston)
