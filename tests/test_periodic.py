@@ -91,11 +91,12 @@ def test_cells_that_cannot_carry_the_load_are_refused_before_they_run() -> None:
         case.run(0.6, error_estimate=False)
 
 
-def test_the_periodic_sc_lattice_runs_from_the_command_line(tmp_path: Path) -> None:
+def test_the_periodic_sc_lattice_runs_from_the_command_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "run"
     code = main(["run", "--cell", "sc", "--periodic", "--stress", "10", "--until-density", "0.53",
-                 "--mesh-level", "1", "--quiet", "--no-plot", "--out", str(out)])
+                 "--mesh-level", "1", "--no-plot", "--out", str(out)])
     assert code == 0
+    assert ", 6.00 contacts per particle pressed" in capsys.readouterr().out
     s = json.loads((out / "summary.json").read_text())
     assert s["particles"] == 1 and s["coordination_number"] == pytest.approx(6.0, abs=1e-12)
     assert s["cell"]["periodic"] is True

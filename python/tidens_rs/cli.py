@@ -236,7 +236,9 @@ def _report(result: Result) -> None:
     else:
         pieces = f"{len(cell['octants'])} octant(s)"
     print(f"cell {cell['name']} ({pieces}, rho0 {cell['rho0_exact']:.5f}), {contact['mode']} contact{planes}")
-    print(f"status: {s['status']}   final density {s['final_density']:.4f} at t = {s['final_time_s']:.4g} s")
+    z_end = s.get("final_coordination_number")
+    contacts = f", {z_end:.2f} contacts per particle pressed" if cell.get("periodic") and z_end is not None else ""
+    print(f"status: {s['status']}   final density {s['final_density']:.4f} at t = {s['final_time_s']:.4g} s{contacts}")
     est = s["error_estimate"]
     print(f"{'rho':>5} {'t FE [s]':>12} {'error est':>10} {'t continuum [s]':>16}")
     for r in MARK_DENSITIES:
