@@ -61,12 +61,12 @@ pub struct CurvePoint {
     pub coordination_number: Option<f64>,
 }
 
-/// The contacts among `particles` whole particles of a periodic cell: the
-/// distinct pairs, each as (particle, particle, periods of the second
+/// The contacts of a periodic cell's whole particles that the surface
+/// pairs `pairs` (slave, master surface) make, surface `k` being
+/// `surface_particles[k]`'s particle moved by its periods: the distinct
+/// pairs of particles, each as (particle, particle, periods of the second
 /// relative to the first) with the first particle not after the second
-/// (and, for a particle and its own image, the periods not negative), of
-/// the surfaces of `pairs` (slave, master surface), surface `k` being
-/// `surface_particles[k]`'s particle moved by its periods.
+/// (and, for a particle and its own image, the periods not negative).
 pub(crate) fn contact_pairs(
     pairs: impl IntoIterator<Item = (usize, usize)>,
     surface_particles: &[(usize, [i8; 3])],

@@ -535,12 +535,12 @@ fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell() {
 /// Two whole spheres of the bcc lattice in a periodic cube touch on the
 /// body diagonals, each the other's periodic images, where the octant
 /// cell's particles touch each other through its mirror planes; the
-/// curves agree within the contact discretisation. Measured at level 1:
-/// the coordination number went from 8 to 10 between rho = 0.7668 and
-/// 0.7698 (the height shrunk by 13.2 %). Measured at level 1 to
+/// curves agree within the contact discretisation. Measured at level 1 to
 /// rho = 0.8 (hold capped at 0.1 E R): t(0.7), t(0.75), t(0.8) = 0.276,
 /// 1.616, 10.56 s against the octant cell's 0.273, 1.620, 10.41 s. With the
 /// hold uncapped this run failed at t = 2.61 s, rho = 0.774 (checked).
+/// The coordination number went from 8 to 10 between rho = 0.7668 and
+/// 0.7698, the height shrunk by 13.2 %.
 #[test]
 fn two_whole_spheres_in_a_periodic_cube_densify_as_the_bcc_octant_cell() {
     let options = MeshOptions {
