@@ -27,7 +27,8 @@
 //!   [`mod@penetration`]. The curvature part `(lambda + eps p) d2p/du2` is
 //!   indefinite; [`ContactSettings::curvature_stiffness`] says whether the
 //!   tangent carries it (the consistent tangent) or leaves it out (a positive
-//!   semi-definite one, which the solver uses). Between Newton solves,
+//!   semi-definite one but for the terms across partly weighted folds, see
+//!   [`FULL_FOLD`]; the solver leaves it out). Between Newton solves,
 //!   [`ParticleContact::augment`] updates the multipliers (Uzawa) until the
 //!   penetration is below its tolerance.
 //! - within a step each node keeps the facets it was paired with at the
@@ -42,6 +43,7 @@
 
 mod error;
 pub mod facet;
+mod fold;
 pub mod gap;
 pub mod penetration;
 mod surface;
@@ -54,6 +56,7 @@ pub use penetration::{
 };
 pub use surface::{ContactSurface, FacetKind};
 
+use fold::FoldWeight;
 use parry3d_f64::math::Vector as PVector;
 use parry3d_f64::query::PointQueryWithLocation;
 use parry3d_f64::shape::TriMesh;
@@ -104,15 +107,37 @@ const NEIGHBOUR_EDGE_SLACK: f64 = 1e-3;
 const NEAR_FACET_SLACK: f64 = 0.1;
 
 /// The fold (the sine of the angle between two neighbouring facets'
-/// planes, inward) from which the term across it has its full weight: below
-/// it the term's force and stiffness scale with a smooth step of the fold
-/// (`10 t^3 - 15 t^4 + 6 t^5`, `t` the fold over this), so that the term vanishes as
-/// the two facets come into one plane (where it would measure the node as
-/// the link's own term does and double its force) and does not switch on
-/// at once where a fold turns inward. The tangent leaves out the weight's
-/// derivative (it couples the node to the far corner of the link's facet,
-/// and is not symmetric); it is zero at the full weight and at a flat
-/// fold.
+/// planes, inward) from which the term across it has its full weight:
+/// below it the term's energy scales with a smooth step of the fold,
+/// `w = 35 t^4 - 84 t^5 + 70 t^6 - 20 t^7` with `t` the fold over this,
+/// so that the term vanishes as the two facets come into one plane (where
+/// it would measure the node as the link's own term does and double its
+/// force) and does not switch on at once where a fold turns inward.
+///
+/// The weight depends on the corners of both facets, so the term's force
+/// has a part on them and its tangent a coupling to them (see the `fold`
+/// module: the term is the weight times the augmented Lagrangian's
+/// energy, and its tangent stays symmetric). With the weight taken as a
+/// constant in the tangent (and the step of degree five, `10 t^3 -
+/// 15 t^4 + 6 t^5`), Newton stalled where a pressed face flattened and
+/// its triangles folded by less than this: a whole sphere in a periodic
+/// cube (the sc lattice at level 1) stopped at rho = 0.7000, its residual
+/// stuck at 5 times the tolerance. With the coupling it reaches 0.8 as
+/// its octant cell does (`benches/periodic.py`). The step's first three
+/// derivatives vanish at both ends, so the force's part on the corners
+/// grows with the cube of the fold from a flat one, where round-off
+/// decides between a valley (a term) and a ridge (none): with the step of
+/// degree five it grew with the square, and central differences of the
+/// force across such a fold read a derivative where there is none.
+///
+/// Tried and not kept: the weight constant in the tangent (the force
+/// `w phi' grad g` alone) with this step also reached 0.8, with 10 %
+/// fewer Newton iterations on sc and fcc and 21 % fewer on bcc (the
+/// coupling is indefinite: on sc 264 of 1204 factorisations needed
+/// LBL^T, against 4), but its consistent tangent was off the residual's
+/// differences by 1.5e-3 of its size (bcc in the ramp); a Gauss-Newton
+/// form of the coupling (positive semi-definite) failed at rho = 0.79 on
+/// sc.
 pub const FULL_FOLD: f64 = 0.02;
 
 /// A fold below this (the sine of its angle) is flat: round-off decides
@@ -153,8 +178,11 @@ pub struct ContactSettings {
     pub search_distance: f64,
     /// Whether a frictionless term's tangent holds the curvature part
     /// `a p d2g/du2` (the consistent tangent) beside the penalty part
-    /// `a eps dg/du dg/du^T`. The curvature part is indefinite; without it
-    /// each term's tangent is positive semi-definite, Newton converges
+    /// `a eps dg/du dg/du^T` (and, for a term across a partly weighted
+    /// fold, `a phi d2w/du2` beside the coupling of `w`, see
+    /// [`FULL_FOLD`]). The curvature part is indefinite; without it
+    /// each term's tangent is positive semi-definite (but for the terms
+    /// across partly weighted folds, whose coupling is not), Newton converges
     /// linearly near the contact edge instead of quadratically, but every
     /// iteration's direction is one of descent: on the bcc and fcc cells at
     /// level 2 the runs take 29 and 34 % fewer Newton iterations and 43 and
@@ -175,12 +203,15 @@ pub struct ContactSettings {
 /// One slave node's link to a master facet, with its contribution.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ContactTerm {
-    /// Body dofs: the slave node's three, then the facet nodes' twelve.
-    pub dofs: [usize; TERM_DOFS],
-    /// Contribution to the internal force \[N\].
-    pub force: [f64; TERM_DOFS],
-    /// Tangent, row-major 15x15 \[N/mm\] (empty if not requested): the
-    /// consistent one, or without its curvature part (see
+    /// Body dofs: the slave node's three, then the facet nodes' twelve
+    /// ([`TERM_DOFS`] in all); a term across a fold whose weight is below
+    /// one appends those of the link's facet's corners that are not the
+    /// facet's (the weight depends on them, see [`FULL_FOLD`]).
+    pub dofs: Vec<usize>,
+    /// Contribution to the internal force \[N\], by dof.
+    pub force: Vec<f64>,
+    /// Tangent, row-major, `dofs.len()` square \[N/mm\] (empty if not
+    /// requested): the consistent one, or without its curvature part (see
     /// [`ContactSettings::curvature_stiffness`]).
     pub tangent: Vec<f64>,
     /// Contact pressure (tied: traction magnitude) at the slave node \[MPa\].
@@ -199,6 +230,15 @@ pub struct ContactTerm {
     /// [`FULL_FOLD`]): `(j, weight)`; None for the link's own term.
     #[serde(default)]
     pub fold: Option<(usize, f64)>,
+}
+
+/// A term across a fold: its place in the ring of the link's facet
+/// `from`, and its weight (see [`FULL_FOLD`]).
+#[derive(Clone, Copy, Debug)]
+struct Across {
+    slot: usize,
+    weight: f64,
+    from: usize,
 }
 
 /// Saved contact state (every slave node's multipliers and ties against
@@ -358,6 +398,13 @@ fn clamp_into_triangle(xi: [f64; 2]) -> [f64; 2] {
 
 fn point(x: &[f64], node: usize) -> [f64; 3] {
     [x[3 * node], x[3 * node + 1], x[3 * node + 2]]
+}
+
+/// The unit normal of the flat triangle of the first three corners of `q`.
+fn unit_normal(q: &[[f64; 3]; 4]) -> [f64; 3] {
+    let c = gap::cross(&gap::sub(&q[1], &q[0]), &gap::sub(&q[2], &q[0]));
+    let l = gap::dot(&c, &c).sqrt();
+    c.map(|v| v / l)
 }
 
 impl ParticleContact {
@@ -1090,15 +1137,12 @@ impl ParticleContact {
                     start: [0.0; 2],
                     ..*link
                 };
-                self.plane_term(
-                    x,
-                    s,
-                    k,
-                    &neighbour,
-                    lambdas[j],
-                    Some((j, weight)),
-                    with_tangent,
-                )
+                let across = Across {
+                    slot: j,
+                    weight,
+                    from: link.facet,
+                };
+                self.plane_term(x, s, k, &neighbour, lambdas[j], Some(across), with_tangent)
             });
         own.into_iter().chain(folds)
     }
@@ -1136,12 +1180,7 @@ impl ParticleContact {
         }
         let (tf, tg) = (master.facets[f], master.facets[g]);
         let (qf, qg) = (tf.map(|n| point(x, n)), tg.map(|n| point(x, n)));
-        let normal = |q: &[[f64; 3]; 4]| {
-            let c = gap::cross(&gap::sub(&q[1], &q[0]), &gap::sub(&q[2], &q[0]));
-            let l = gap::dot(&c, &c).sqrt();
-            c.map(|v| v / l)
-        };
-        let (nf, ng) = (normal(&qf), normal(&qg));
+        let (nf, ng) = (unit_normal(&qf), unit_normal(&qg));
         let cross = gap::cross(&nf, &ng);
         let sine = gap::dot(&cross, &cross).sqrt();
         if !(sine > ROUND_OFF_FOLD) {
@@ -1158,13 +1197,34 @@ impl ParticleContact {
         if !(outside(&tg, &qg, &tf, nf) && outside(&tf, &qf, &tg, ng)) {
             return None;
         }
-        let t = (sine / FULL_FOLD).min(1.0);
-        Some(t * t * t * (10.0 - 15.0 * t + 6.0 * t * t))
+        Some(fold::weight(sine))
+    }
+
+    /// The weight of the term across the fold between facets `f` and `g`
+    /// of surface `m` ([`ParticleContact::fold`], `weight` there) with its
+    /// derivatives in the configuration `x`.
+    fn fold_derivatives(
+        &self,
+        x: &[f64],
+        m: usize,
+        f: usize,
+        g: usize,
+        hessian: bool,
+    ) -> FoldWeight {
+        let facets = &self.surfaces[m].facets;
+        let nodes: [usize; 6] = std::array::from_fn(|i| {
+            if i < 3 {
+                facets[f][i]
+            } else {
+                facets[g][i - 3]
+            }
+        });
+        FoldWeight::at(nodes, nodes.map(|n| point(x, n)), hessian)
     }
 
     /// The term of the node against the plane (or patch) of `link`'s facet,
     /// with multiplier `lambda` \[MPa\]; `fold` marks a term across a fold
-    /// (see [`ContactTerm::fold`]).
+    /// (see [`ContactTerm::fold`]), with its weight.
     #[allow(clippy::too_many_arguments)]
     fn plane_term(
         &self,
@@ -1173,7 +1233,7 @@ impl ParticleContact {
         k: usize,
         link: &Link,
         lambda: f64,
-        fold: Option<(usize, f64)>,
+        fold: Option<Across>,
         with_tangent: bool,
     ) -> Option<ContactTerm> {
         let (m, facet) = (link.master, link.facet);
@@ -1206,16 +1266,13 @@ impl ParticleContact {
         }
         // A term across a fold acts with its weight: the augmented
         // Lagrangian of a penalty `w eps` and multiplier `w lambda`.
-        let weight = fold.map_or(1.0, |(_, w)| w);
+        let weight = fold.map_or(1.0, |a| a.weight);
         let spring = match self.touch_force {
             Some(k) if pressure <= 0.0 && fold.is_none() => Some(k),
             _ => None,
         };
         let traction = spring.map_or(pressure, |k| k * (pen - link.reference));
-        let mut force = [0.0; TERM_DOFS];
-        for (f, g) in force.iter_mut().zip(grad.iter()) {
-            *f = area * weight * traction * g;
-        }
+        let force: Vec<f64> = grad.iter().map(|g| area * weight * traction * g).collect();
         let stiffness = if pressure > 0.0 {
             eps
         } else if let Some(k) = spring {
@@ -1224,6 +1281,7 @@ impl ParticleContact {
             (TOUCH_STIFFNESS * eps).min(self.settings.touch_stiffness_cap)
         };
         let (kg, kh) = (area * weight * stiffness, area * weight * traction);
+        let curvature = hess.is_some();
         let tangent = match (with_tangent, hess) {
             (true, Some(h)) => {
                 let mut k = Vec::with_capacity(TERM_DOFS * TERM_DOFS);
@@ -1241,8 +1299,8 @@ impl ParticleContact {
             }
             (false, _) => Vec::new(),
         };
-        Some(ContactTerm {
-            dofs,
+        let mut term = ContactTerm {
+            dofs: dofs.to_vec(),
             force,
             tangent,
             pressure: weight * pressure,
@@ -1250,8 +1308,18 @@ impl ParticleContact {
             slave: (s, k),
             master: (m, facet),
             location: xi,
-            fold,
-        })
+            fold: fold.map(|a| (a.slot, a.weight)),
+        };
+        // Below its full weight, the weight's dependence on the corners of
+        // the two facets (see [`FULL_FOLD`]).
+        if let Some(a) = fold
+            && pressure > 0.0
+            && a.weight < 1.0
+        {
+            self.fold_derivatives(x, m, a.from, facet, curvature)
+                .add_to(&mut term, &grad, area, pressure, eps);
+        }
+        Some(term)
     }
 
     /// Term of a tied slave node: a vector penalty on the distance to its
@@ -1277,7 +1345,7 @@ impl ParticleContact {
         // d gap / d x: +1 for the slave, -N_a for facet node a.
         let weights = [1.0, -n[0], -n[1], -n[2], -n[3]];
         let traction: [f64; 3] = [0, 1, 2].map(|i| lambda[i] + eps * gap[i]);
-        let mut force = [0.0; TERM_DOFS];
+        let mut force = vec![0.0; TERM_DOFS];
         for a in 0..5 {
             for i in 0..3 {
                 force[3 * a + i] = area * traction[i] * weights[a];
@@ -1299,7 +1367,7 @@ impl ParticleContact {
         };
         let length = (gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2]).sqrt();
         ContactTerm {
-            dofs,
+            dofs: dofs.to_vec(),
             force,
             tangent,
             pressure: traction.iter().map(|v| v * v).sum::<f64>().sqrt(),

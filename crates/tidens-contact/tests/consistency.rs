@@ -93,6 +93,70 @@ fn triangle_contact_tangent_equals_finite_differences_of_the_force() {
     );
 }
 
+/// A small quad pressed 2e-5 mm into a valley between two flat triangles
+/// (a unit quad split along its diagonal, its other corners raised so that
+/// the fold's sine is half of `FULL_FOLD`), across the fold's line: each
+/// node has its link's term and a term across the fold, whose weight
+/// depends on the corners of both triangles: the terms' dofs take in the
+/// far corner, the force is the gradient of the weighted energy and the
+/// tangent its Hessian. Without the coupling the weight brings, the
+/// tangent's entry of the slave node's normal was 0.2 % off its
+/// differences (7.493e-5 against 7.477e-5 N/mm), and this test failed.
+#[test]
+fn a_term_across_a_slight_fold_has_the_weights_derivative_in_its_tangent() {
+    let sine = 0.5 * tidens_contact::FULL_FOLD;
+    // Each half's normal is (-+rise, +-rise, 1): the sine between them is
+    // 2 sqrt(2) rise / (1 + 2 rise^2).
+    let rise = (1.0 - (1.0 - sine * sine).sqrt()) / (2f64.sqrt() * sine);
+    let surface = |x: f64, y: f64| rise * (x - y).abs();
+    let mut nodes = vec![
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, rise],
+        [1.0, 1.0, 0.0],
+        [0.0, 1.0, rise],
+    ];
+    // Across the fold (u) and along it (v), 1e-3 mm from its line; the
+    // quad faces -z (clockwise seen from +z).
+    let (u, v) = (
+        [1.0, -1.0].map(|c| c * 1e-3 / 2f64.sqrt()),
+        [1.0, 1.0].map(|c| c * 1e-3 / 2f64.sqrt()),
+    );
+    for (a, b) in [(1.0, -1.0), (-1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+        let (x, y) = (0.5 + a * u[0] + b * v[0], 0.5 + a * u[1] + b * v[1]);
+        nodes.push([x, y, surface(x, y) - 2e-5]);
+    }
+    let surfaces = vec![
+        ContactSurface::from_quads_as_triangles(&[[0, 1, 2, 3]], &nodes).unwrap(),
+        ContactSurface::from_quads(&[[4, 5, 6, 7]], &nodes).unwrap(),
+    ];
+    let mut contact = ParticleContact::new(
+        surfaces,
+        ContactSettings {
+            mode: ContactMode::Frictionless,
+            penalty: 100.0,
+            search_distance: 0.3,
+            curvature_stiffness: true,
+            touch_stiffness_cap: f64::INFINITY,
+        },
+    )
+    .unwrap();
+    let x: Vec<f64> = nodes.iter().flatten().copied().collect();
+    contact.pair(&x);
+    let eval = contact.evaluate(&x, true);
+    let across = eval
+        .terms
+        .iter()
+        .filter(|t| t.pressure > 0.0 && t.fold.is_some_and(|(_, w)| w > 0.1 && w < 0.9))
+        .count();
+    let coupled = eval
+        .terms
+        .iter()
+        .filter(|t| t.dofs.len() > tidens_contact::TERM_DOFS)
+        .count();
+    assert_eq!((across, coupled), (4, 4));
+    check_tangent_of(&contact, &nodes);
+}
+
 /// Tied contact: the nodes pressed in are tied where they touch, then the
 /// patches slide against each other (the upper one moved along x and y), so
 /// each tie carries a tangential and a normal gap. The vector penalty's
@@ -226,7 +290,6 @@ fn the_tangent_without_curvature_is_semidefinite_and_what_it_leaves_out_is_not()
     };
     let (full, plain) = (contact_with(true), contact_with(false));
     assert_eq!(full.terms.len(), plain.terms.len());
-    let m = tidens_contact::TERM_DOFS;
     let (mut lowest, mut left_out_lowest, mut left_out_highest) = (f64::INFINITY, 0.0_f64, 0.0_f64);
     for (a, b) in full
         .terms
@@ -235,10 +298,11 @@ fn the_tangent_without_curvature_is_semidefinite_and_what_it_leaves_out_is_not()
         .filter(|(a, _)| a.pressure > 0.0)
     {
         assert_eq!(
-            (a.dofs, a.force),
-            (b.dofs, b.force),
+            (&a.dofs, &a.force),
+            (&b.dofs, &b.force),
             "the forces do not depend on the tangent"
         );
+        let m = b.dofs.len();
         let kb = nalgebra::DMatrix::from_row_slice(m, m, &b.tangent);
         let scale = kb.amax();
         lowest = lowest.min(kb.clone().symmetric_eigen().eigenvalues.min() / scale);

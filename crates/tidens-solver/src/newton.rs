@@ -821,8 +821,8 @@ mod tests {
     /// surface 1, `penetration` deep \[mm\].
     fn term(k: usize, f: usize, penetration: f64) -> tidens_contact::ContactTerm {
         tidens_contact::ContactTerm {
-            dofs: [0; tidens_contact::TERM_DOFS],
-            force: [0.0; tidens_contact::TERM_DOFS],
+            dofs: vec![0; tidens_contact::TERM_DOFS],
+            force: vec![0.0; tidens_contact::TERM_DOFS],
             tangent: Vec::new(),
             pressure: 0.0,
             penetration,

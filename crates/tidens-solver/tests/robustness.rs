@@ -321,7 +321,7 @@ fn each_multiplier_update_has_its_own_newton_iterations() {
         ..Preset::Ti64Creep1293K.material()
     };
     let mut settings = pressed(10.0, 0.75);
-    let limit = 8;
+    let limit = 6;
     settings.newton.max_iterations = limit;
     let mut sim = Simulation::new(&scene, material, settings).unwrap();
     // Steps that took more iterations than the limit at their first attempt.
