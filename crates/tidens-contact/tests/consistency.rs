@@ -129,19 +129,8 @@ fn a_term_across_a_slight_fold_has_the_weights_derivative_in_its_tangent() {
         ContactSurface::from_quads_as_triangles(&[[0, 1, 2, 3]], &nodes).unwrap(),
         ContactSurface::from_quads(&[[4, 5, 6, 7]], &nodes).unwrap(),
     ];
-    let mut contact = ParticleContact::new(
-        surfaces,
-        ContactSettings {
-            mode: ContactMode::Frictionless,
-            penalty: 100.0,
-            search_distance: 0.3,
-            curvature_stiffness: true,
-            touch_stiffness_cap: f64::INFINITY,
-        },
-    )
-    .unwrap();
+    let contact = paired(surfaces, &nodes);
     let x: Vec<f64> = nodes.iter().flatten().copied().collect();
-    contact.pair(&x);
     let eval = contact.evaluate(&x, true);
     let across = eval
         .terms
@@ -200,6 +189,12 @@ fn tied_contact_tangent_equals_finite_differences_of_the_force() {
 }
 
 fn check_tangent(surfaces: Vec<ContactSurface>, nodes: &[[f64; 3]]) {
+    check_tangent_of(&paired(surfaces, nodes), nodes);
+}
+
+/// Frictionless contact among `surfaces` (penalty 100 MPa/mm, the
+/// consistent tangent), its nodes paired at `nodes`.
+fn paired(surfaces: Vec<ContactSurface>, nodes: &[[f64; 3]]) -> ParticleContact {
     let mut contact = ParticleContact::new(
         surfaces,
         ContactSettings {
@@ -213,7 +208,7 @@ fn check_tangent(surfaces: Vec<ContactSurface>, nodes: &[[f64; 3]]) {
     .unwrap();
     let x: Vec<f64> = nodes.iter().flatten().copied().collect();
     contact.pair(&x);
-    check_tangent_of(&contact, nodes);
+    contact
 }
 
 /// The assembled tangent of the terms carrying force against central
