@@ -71,16 +71,17 @@ fn dot<D: DualNum<Primitive = f64> + Copy>(a: &[D; 3], b: &[D; 3]) -> D {
 /// three, then the second's, xyz each), for any `num-dual` scalar.
 fn weight_of<D: DualNum<Primitive = f64> + Copy>(w: &SVector<D, CORNER_DOFS>) -> D {
     let corner = |a: usize| [w[3 * a], w[3 * a + 1], w[3 * a + 2]];
-    let normal = |a: usize| {
-        let c = cross(
-            &sub(&corner(a + 1), &corner(a)),
-            &sub(&corner(a + 2), &corner(a)),
-        );
-        let l = dot(&c, &c).sqrt();
-        c.map(|v| v / l)
-    };
+    let normal = |a: usize| unit_normal(&[corner(a), corner(a + 1), corner(a + 2)]);
     let c = cross(&normal(0), &normal(3));
     step(dot(&c, &c).sqrt())
+}
+
+/// The unit normal of the flat triangle of the first three corners of `q`
+/// (right-handed), for any `num-dual` scalar.
+pub(crate) fn unit_normal<D: DualNum<Primitive = f64> + Copy>(q: &[[D; 3]]) -> [D; 3] {
+    let c = cross(&sub(&q[1], &q[0]), &sub(&q[2], &q[0]));
+    let l = dot(&c, &c).sqrt();
+    c.map(|v| v / l)
 }
 
 /// The weight of a term across a fold with its gradient \[1/mm\] and, if

@@ -400,13 +400,6 @@ fn point(x: &[f64], node: usize) -> [f64; 3] {
     [x[3 * node], x[3 * node + 1], x[3 * node + 2]]
 }
 
-/// The unit normal of the flat triangle of the first three corners of `q`.
-fn unit_normal(q: &[[f64; 3]; 4]) -> [f64; 3] {
-    let c = gap::cross(&gap::sub(&q[1], &q[0]), &gap::sub(&q[2], &q[0]));
-    let l = gap::dot(&c, &c).sqrt();
-    c.map(|v| v / l)
-}
-
 impl ParticleContact {
     /// Contact among `surfaces` (one per particle).
     pub fn new(
@@ -1180,7 +1173,7 @@ impl ParticleContact {
         }
         let (tf, tg) = (master.facets[f], master.facets[g]);
         let (qf, qg) = (tf.map(|n| point(x, n)), tg.map(|n| point(x, n)));
-        let (nf, ng) = (unit_normal(&qf), unit_normal(&qg));
+        let (nf, ng) = (fold::unit_normal(&qf), fold::unit_normal(&qg));
         let cross = gap::cross(&nf, &ng);
         let sine = gap::dot(&cross, &cross).sqrt();
         if !(sine > ROUND_OFF_FOLD) {
