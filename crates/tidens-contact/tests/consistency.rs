@@ -383,6 +383,90 @@ fn the_touch_force_is_a_spring_on_the_change_of_penetration_since_pairing() {
     }
 }
 
+/// The touch force is fixed for the step, so that the force stays
+/// continuous: on a pair of surfaces that pressed nowhere when the step
+/// started every node carries the spring, pressed or not (its pressure
+/// added), and the tangent is the force's derivative; once the pair has
+/// pressed (the multipliers updated, paired for the next step) no node of
+/// it does.
+#[test]
+fn the_touch_force_stays_for_the_step_and_leaves_a_pair_that_pressed() {
+    for triangles in [false, true] {
+        let (nodes, lower, upper) = patches(-0.01);
+        let surface = |faces: &[[usize; 4]]| {
+            if triangles {
+                ContactSurface::from_triangles(&split(faces), &nodes).unwrap()
+            } else {
+                ContactSurface::from_quads(faces, &nodes).unwrap()
+            }
+        };
+        let (penalty, stiffness) = (100.0, 7.0);
+        let mut contact = ParticleContact::new(
+            vec![surface(&lower), surface(&upper)],
+            ContactSettings {
+                mode: ContactMode::Frictionless,
+                penalty,
+                search_distance: 0.6,
+                curvature_stiffness: true,
+                touch_stiffness_cap: f64::INFINITY,
+            },
+        )
+        .unwrap();
+        contact.set_touch_force(Some(stiffness));
+        let x: Vec<f64> = nodes.iter().flatten().copied().collect();
+        contact.pair(&x);
+        let at_pairing = contact.evaluate(&x, false);
+        // The upper patch moved down by 0.04: the nodes nearest the middle
+        // pressed, the rim's still open.
+        let mut moved = nodes.clone();
+        for p in &mut moved[16..] {
+            p[0] += 0.002;
+            p[2] -= 0.04;
+        }
+        let xm: Vec<f64> = moved.iter().flatten().copied().collect();
+        let eval = contact.evaluate(&xm, true);
+        let slave_force = |t: &tidens_contact::ContactTerm| {
+            (t.force[0].powi(2) + t.force[1].powi(2) + t.force[2].powi(2)).sqrt()
+        };
+        let (mut pressed, mut open) = (0, 0);
+        // (Nodes in the band at pairing: their reference is known here.)
+        for t in eval.terms.iter().filter(|t| {
+            at_pairing
+                .terms
+                .iter()
+                .any(|a| a.slave == t.slave && a.master == t.master)
+        }) {
+            let change = t.penetration - at_pairing_reading(&at_pairing, t);
+            let pressure = (penalty * t.penetration).max(0.0);
+            assert_eq!(t.pressure, pressure);
+            let area = 0.5 * contact.surfaces()[t.slave.0].areas[t.slave.1];
+            let expected = area * (pressure + stiffness * change);
+            assert!(
+                (slave_force(t) - expected).abs() < 1e-12,
+                "{} against {expected}",
+                slave_force(t)
+            );
+            if pressure > 0.0 {
+                pressed += 1
+            } else {
+                open += 1
+            }
+        }
+        assert!(pressed >= 2 && open >= 2, "{pressed} pressed, {open} open");
+        check_tangent_of_terms(&contact, &xm, |_| true);
+        // The pair pressed: the next step has no spring on it. Open nodes
+        // carry nothing, pressed ones their pressure alone.
+        contact.augment(&xm, &eval);
+        contact.pair(&xm);
+        let next = contact.evaluate(&xm, true);
+        assert!(next.terms.iter().any(|t| t.pressure > 0.0));
+        for t in &next.terms {
+            let area = 0.5 * contact.surfaces()[t.slave.0].areas[t.slave.1];
+            assert!((slave_force(t) - area * t.pressure).abs() < 1e-12);
+        }
+    }
+}
+
 /// The penetration the term of the same node and facet read at pairing.
 fn at_pairing_reading(
     at_pairing: &tidens_contact::ContactEvaluation,
