@@ -316,6 +316,41 @@ fn the_tangent_without_curvature_is_semidefinite_and_what_it_leaves_out_is_not()
     );
 }
 
+/// Two patches apart by 0.01 at the closest point, the nodes near the
+/// middle within the touch band (a tenth of the search distance, 0.06),
+/// meshed with quads or `triangles`, in contact with `penalty` and a touch
+/// force of `stiffness`, paired there: the contact, the nodes and their
+/// coordinates.
+fn touching_patches(
+    triangles: bool,
+    penalty: f64,
+    stiffness: f64,
+) -> (ParticleContact, Vec<[f64; 3]>, Vec<f64>) {
+    let (nodes, lower, upper) = patches(-0.01);
+    let surface = |faces: &[[usize; 4]]| {
+        if triangles {
+            ContactSurface::from_triangles(&split(faces), &nodes).unwrap()
+        } else {
+            ContactSurface::from_quads(faces, &nodes).unwrap()
+        }
+    };
+    let mut contact = ParticleContact::new(
+        vec![surface(&lower), surface(&upper)],
+        ContactSettings {
+            mode: ContactMode::Frictionless,
+            penalty,
+            search_distance: 0.6,
+            curvature_stiffness: true,
+            touch_stiffness_cap: f64::INFINITY,
+        },
+    )
+    .unwrap();
+    contact.set_touch_force(Some(stiffness));
+    let x: Vec<f64> = nodes.iter().flatten().copied().collect();
+    contact.pair(&x);
+    (contact, nodes, x)
+}
+
 /// The touch force ([`ParticleContact::set_touch_force`]): nodes near the
 /// other surface but apart from it carry a spring on the change of their
 /// penetration since pairing. At the pairing configuration it is zero;
@@ -324,31 +359,8 @@ fn the_tangent_without_curvature_is_semidefinite_and_what_it_leaves_out_is_not()
 #[test]
 fn the_touch_force_is_a_spring_on_the_change_of_penetration_since_pairing() {
     for triangles in [false, true] {
-        // Apart by 0.01 at the closest point; the nodes near the middle
-        // within the touch band (a tenth of the search distance, 0.06).
-        let (nodes, lower, upper) = patches(-0.01);
-        let surface = |faces: &[[usize; 4]]| {
-            if triangles {
-                ContactSurface::from_triangles(&split(faces), &nodes).unwrap()
-            } else {
-                ContactSurface::from_quads(faces, &nodes).unwrap()
-            }
-        };
-        let mut contact = ParticleContact::new(
-            vec![surface(&lower), surface(&upper)],
-            ContactSettings {
-                mode: ContactMode::Frictionless,
-                penalty: 100.0,
-                search_distance: 0.6,
-                curvature_stiffness: true,
-                touch_stiffness_cap: f64::INFINITY,
-            },
-        )
-        .unwrap();
         let stiffness = 7.0;
-        contact.set_touch_force(Some(stiffness));
-        let x: Vec<f64> = nodes.iter().flatten().copied().collect();
-        contact.pair(&x);
+        let (contact, nodes, x) = touching_patches(triangles, 100.0, stiffness);
         let at_pairing = contact.evaluate(&x, false);
         assert!(at_pairing.terms.len() >= 4);
         assert!(
@@ -392,29 +404,8 @@ fn the_touch_force_is_a_spring_on_the_change_of_penetration_since_pairing() {
 #[test]
 fn the_touch_force_stays_for_the_step_and_leaves_a_pair_that_pressed() {
     for triangles in [false, true] {
-        let (nodes, lower, upper) = patches(-0.01);
-        let surface = |faces: &[[usize; 4]]| {
-            if triangles {
-                ContactSurface::from_triangles(&split(faces), &nodes).unwrap()
-            } else {
-                ContactSurface::from_quads(faces, &nodes).unwrap()
-            }
-        };
         let (penalty, stiffness) = (100.0, 7.0);
-        let mut contact = ParticleContact::new(
-            vec![surface(&lower), surface(&upper)],
-            ContactSettings {
-                mode: ContactMode::Frictionless,
-                penalty,
-                search_distance: 0.6,
-                curvature_stiffness: true,
-                touch_stiffness_cap: f64::INFINITY,
-            },
-        )
-        .unwrap();
-        contact.set_touch_force(Some(stiffness));
-        let x: Vec<f64> = nodes.iter().flatten().copied().collect();
-        contact.pair(&x);
+        let (mut contact, nodes, x) = touching_patches(triangles, penalty, stiffness);
         let at_pairing = contact.evaluate(&x, false);
         // The upper patch moved down by 0.04: the nodes nearest the middle
         // pressed, the rim's still open.
