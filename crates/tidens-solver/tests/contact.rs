@@ -489,8 +489,9 @@ fn press_to(
 /// is; its mesh is the octant's mirrored eight times, so the two differ
 /// only in how the contacts are held (the octant's on rigid mirror planes,
 /// the sphere's on its periodic images by the penalty contact) and in the
-/// steps taken. Measured at level 1 to rho = 0.75: t(0.6) 13.636 s against
-/// 13.638 s, in 152 steps and 1087 Newton iterations to 0.75. Without the
+/// steps taken. Measured at level 1: t(0.6) 13.63 s against 13.64 s (-0.03
+/// %), and to rho = 0.8 in 148 steps and 922 Newton iterations
+/// (`benches/periodic.py --cells sc --until 0.8`). Without the
 /// hold on the sphere's rotation (the drag alone) t(0.6) was 13.11 s (3.8
 /// % off); with the hold ten times weaker it failed at rho = 0.567.
 #[test]
