@@ -631,7 +631,7 @@ impl ParticleContact {
     /// random spheres at level 1 (seed 0), in the load's ramp, the piston's
     /// residual was 7.5e-5 N at 1e-3 of a Newton direction (115 terms
     /// pressed) and 3.9e-4 N from 1e-2 of it on (114), every longer step
-    /// was refused, and the step failed after 25 iterations. With the
+    /// was refused, and the attempt failed after 34 iterations. With the
     /// springs fixed for the step the ramp (to t = 1 s, tolerance 0.08)
     /// took 41 steps and 608 Newton iterations, against 53 and 714.
     ///
