@@ -664,9 +664,7 @@ impl Simulation {
                 // them touches, Newton goes on. An iterate of the line
                 // search was paired afresh already (`relink_contacts`).
                 if !relinked && self.pair_contacts(&u, true) > 0 {
-                    eval = self
-                        .evaluate(&u, dt, false)
-                        .map_err(|e| fail(e.into(), iterations))?;
+                    eval = self.evaluate_contact_again(eval, &u);
                     continue;
                 }
                 // The multipliers take each converged step's pressures (see
@@ -697,9 +695,7 @@ impl Simulation {
                 if let Some(c) = self.contact.as_mut() {
                     c.augment(&x, &eval.contact);
                 }
-                eval = self
-                    .evaluate(&u, dt, false)
-                    .map_err(|e| fail(e.into(), iterations))?;
+                eval = self.evaluate_contact_again(eval, &u);
                 continue;
             }
             if iterations - solve_start >= self.settings.newton.max_iterations {
@@ -768,9 +764,7 @@ impl Simulation {
             // to 0.808 s pairing at convergence only.
             relinked = true;
             if self.relink_contacts(&u) {
-                eval = self
-                    .evaluate(&u, dt, false)
-                    .map_err(|e| fail(e.into(), iterations))?;
+                eval = self.evaluate_contact_again(eval, &u);
             }
         }
     }
