@@ -351,6 +351,17 @@ fn touching_patches(
     (contact, nodes, x)
 }
 
+/// The flat coordinates of the patches of [`touching_patches`] with the
+/// upper patch (nodes 16..32) moved down by `down` and sideways by 0.002.
+fn upper_patch_moved(nodes: &[[f64; 3]], down: f64) -> Vec<f64> {
+    let mut moved = nodes.to_vec();
+    for p in &mut moved[16..] {
+        p[0] += 0.002;
+        p[2] -= down;
+    }
+    moved.iter().flatten().copied().collect()
+}
+
 /// The touch force ([`ParticleContact::set_touch_force`]): nodes near the
 /// other surface but apart from it carry a spring on the change of their
 /// penetration since pairing. At the pairing configuration it is zero;
@@ -371,12 +382,7 @@ fn the_touch_force_is_a_spring_on_the_change_of_penetration_since_pairing() {
         );
         // The upper patch (nodes 16..32) moved down by 0.004 and sideways:
         // still apart, each node closer by about 0.004.
-        let mut moved = nodes.clone();
-        for p in &mut moved[16..] {
-            p[0] += 0.002;
-            p[2] -= 0.004;
-        }
-        let xm: Vec<f64> = moved.iter().flatten().copied().collect();
+        let xm = upper_patch_moved(&nodes, 0.004);
         let eval = contact.evaluate(&xm, true);
         for t in &eval.terms {
             assert_eq!(t.pressure, 0.0);
@@ -409,12 +415,7 @@ fn the_touch_force_stays_for_the_step_and_leaves_a_pair_that_pressed() {
         let at_pairing = contact.evaluate(&x, false);
         // The upper patch moved down by 0.04: the nodes nearest the middle
         // pressed, the rim's still open.
-        let mut moved = nodes.clone();
-        for p in &mut moved[16..] {
-            p[0] += 0.002;
-            p[2] -= 0.04;
-        }
-        let xm: Vec<f64> = moved.iter().flatten().copied().collect();
+        let xm = upper_patch_moved(&nodes, 0.04);
         let eval = contact.evaluate(&xm, true);
         let slave_force = |t: &tidens_contact::ContactTerm| {
             (t.force[0].powi(2) + t.force[1].powi(2) + t.force[2].powi(2)).sqrt()
