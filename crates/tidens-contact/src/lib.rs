@@ -27,8 +27,8 @@
 //!   [`mod@penetration`]. The curvature part `(lambda + eps p) d2p/du2` is
 //!   indefinite; [`ContactSettings::curvature_stiffness`] says whether the
 //!   tangent carries it (the consistent tangent) or leaves it out (a positive
-//!   semi-definite one but for the terms across partly weighted folds, see
-//!   [`FULL_FOLD`]; the solver leaves it out). Between Newton solves,
+//!   semi-definite one but for the coupling of the terms across partly
+//!   weighted folds, see [`FULL_FOLD`]; the solver leaves it out). Between Newton solves,
 //!   [`ParticleContact::augment`] updates the multipliers (Uzawa) until the
 //!   penetration is below its tolerance.
 //! - within a step each node keeps the facets it was paired with at the
@@ -178,11 +178,14 @@ pub struct ContactSettings {
     pub search_distance: f64,
     /// Whether a frictionless term's tangent holds the curvature part
     /// `a p d2g/du2` (the consistent tangent) beside the penalty part
-    /// `a eps dg/du dg/du^T` (and, for a term across a partly weighted
-    /// fold, `a phi d2w/du2` beside the coupling of `w`, see
-    /// [`FULL_FOLD`]). The curvature part is indefinite; without it
+    /// `a eps dg/du dg/du^T`. A term across a partly weighted fold carries
+    /// the derivatives of its weight `w` either way: the coupling `a phi'
+    /// (dg/du dw/du^T + dw/du dg/du^T)` and `a phi d2w/du2`, of which the
+    /// tangent without curvature keeps the positive semi-definite part (see
+    /// [`FULL_FOLD`] and the `fold` module). The curvature part is
+    /// indefinite; without it
     /// each term's tangent is positive semi-definite (but for the terms
-    /// across partly weighted folds, whose coupling is not), Newton converges
+    /// across partly weighted folds, whose weight's part is not), Newton converges
     /// linearly near the contact edge instead of quadratically, but every
     /// iteration's direction is one of descent: on the bcc and fcc cells at
     /// level 2 the runs take 29 and 34 % fewer Newton iterations and 43 and
@@ -1349,13 +1352,14 @@ impl ParticleContact {
             fold: fold.map(|a| (a.slot, a.weight)),
         };
         // Below its full weight, the weight's dependence on the corners of
-        // the two facets (see [`FULL_FOLD`]).
+        // the two facets (see [`FULL_FOLD`]), its Hessian in any tangent
+        // (all of it in the consistent one, see the `fold` module).
         if let Some(a) = fold
             && pressure > 0.0
             && a.weight < 1.0
         {
-            self.fold_derivatives(x, m, a.from, facet, curvature)
-                .add_to(&mut term, &grad, area, pressure, eps);
+            self.fold_derivatives(x, m, a.from, facet, with_tangent)
+                .add_to(&mut term, &grad, area, pressure, eps, curvature);
         }
         Some(term)
     }
