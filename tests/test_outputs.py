@@ -147,6 +147,10 @@ def test_a_run_stopped_in_the_middle_resumes_to_the_same_curve_bit_for_bit(tmp_p
     b = json.loads((out / "summary.json").read_text())
     assert b["status"] == "reached_density" and b["times_to_density_s"] == a["times_to_density_s"]
     assert b["error_estimate"]["relative"] == a["error_estimate"]["relative"]
+    # The run time counts the steps before the checkpoint too, which this
+    # call did not take (its own wall time also holds writing the outputs).
+    assert resumed.run_seconds > resumed.wall_seconds
+    assert b["run_seconds"] == resumed.run_seconds
     # The snapshots of both parts are in the collection, once each.
     names = [name for _, name in io.read_pvd(out / "fields.pvd")]
     assert names == [name for _, name in io.read_pvd(tmp_path / "through" / "fields.pvd")]

@@ -24,6 +24,10 @@ if TYPE_CHECKING:
 MARK_DENSITIES = (0.6, 0.7, 0.8, 0.9, 0.95)
 
 
+# The timed parts of a step in ``Result.stats`` [s].
+_TIMED_PARTS = ("evaluation_seconds", "contact_seconds", "assembly_seconds", "linear_seconds")
+
+
 def interpolate_time(time_s: np.ndarray, rho: np.ndarray, target: float) -> float | None:
     """Time [s] at which the (non-decreasing) density first reaches
     ``target``, linearly interpolated between steps; None if never reached."""
@@ -112,6 +116,17 @@ class Result:
     @property
     def applied_stress_mpa(self) -> np.ndarray:
         return self.curve["applied_stress_mpa"]
+
+    @property
+    def run_seconds(self) -> float:
+        """Wall time the run's curve took to compute [s]: its steps' time
+        summed across resumes from checkpoints (``wall_seconds`` is this
+        call's alone). A checkpoint written before tidens kept that total
+        starts it at zero; the timed parts of the steps (elements, contact,
+        assembly, linear solves), which every checkpoint carries, then bound
+        it from below."""
+        parts = sum(float(self.stats.get(k, 0.0)) for k in _TIMED_PARTS)
+        return max(float(self.stats.get("wall_seconds", 0.0)), parts)
 
     @property
     def rho0(self) -> float:
@@ -260,6 +275,7 @@ class Result:
             "accuracy": self.accuracy_search,
             "continuum_times_to_density_s": continuum_times,
             "wall_seconds": self.wall_seconds,
+            "run_seconds": self.run_seconds,
             "steps": int(last["step"]),
             "newton_iterations": int(last["newton_total"]),
             "degrees_of_freedom": self.degrees_of_freedom,

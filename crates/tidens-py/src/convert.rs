@@ -168,6 +168,7 @@ pub(crate) fn stats_dict<'py>(py: Python<'py>, s: &RunStats) -> PyResult<Bound<'
     dict.set_item("assembly_seconds", s.assembly_seconds)?;
     dict.set_item("linear_seconds", s.linear_seconds)?;
     dict.set_item("max_drag_share", s.max_drag_share)?;
+    dict.set_item("wall_seconds", s.wall_seconds)?;
     Ok(dict)
 }
 

@@ -669,8 +669,10 @@ impl PySimulation {
     /// sparsity pattern grew for new particle contacts, each a symbolic
     /// factorisation), evaluations, tangent_evaluations (counts), the wall
     /// times evaluation_seconds, contact_seconds, assembly_seconds,
-    /// linear_seconds [s], and max_drag_share (periodic cells: the largest
-    /// stabilising drag of a step over the piston force).
+    /// linear_seconds [s], max_drag_share (periodic cells: the largest
+    /// stabilising drag of a step over the piston force), and wall_seconds
+    /// (the time spent advancing the steps of the curve, summed across
+    /// resumes from checkpoints) [s].
     fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let stats = self.progress().stats;
         stats_dict(py, &stats)

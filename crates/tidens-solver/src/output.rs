@@ -153,6 +153,11 @@ pub struct RunStats {
     /// summed over the nodes, over the piston force then (0 elsewhere).
     #[serde(default)]
     pub max_drag_share: f64,
+    /// Wall time in [`Simulation::advance`] over the steps of the curve,
+    /// summed across resumes (steps recomputed after a resume count once;
+    /// checkpoints written before this total existed start it at zero) \[s\].
+    #[serde(default)]
+    pub wall_seconds: f64,
 }
 
 impl Simulation {

@@ -620,13 +620,23 @@ impl Simulation {
 
     /// Advances by one converged step (cutting the step back as needed) and
     /// returns its curve point. On failure the state stays at the last
-    /// converged step, so the curve so far is kept.
+    /// converged step, so the curve so far is kept. The time it takes is
+    /// added to [`RunStats::wall_seconds`].
     pub fn advance(&mut self) -> Result<&CurvePoint, SolverError> {
+        let start = std::time::Instant::now();
+        let outcome = self.step_once();
+        self.stats.wall_seconds += start.elapsed().as_secs_f64();
+        outcome?;
+        self.curve
+            .last()
+            .ok_or(SolverError::Internal("the curve lost its initial point"))
+    }
+
+    /// One converged step, or the reason there is none (see
+    /// [`Simulation::advance`]).
+    fn step_once(&mut self) -> Result<(), SolverError> {
         if self.status != Status::Running {
-            return self
-                .curve
-                .last()
-                .ok_or(SolverError::Internal("the curve lost its initial point"));
+            return Ok(());
         }
         if self.stats.steps >= self.settings.max_steps {
             return Err(SolverError::StepLimit {
@@ -673,9 +683,7 @@ impl Simulation {
             self.forget_caches();
         }
         self.check_stop();
-        self.curve
-            .last()
-            .ok_or(SolverError::Internal("the curve lost its initial point"))
+        Ok(())
     }
 
     /// Step control on a converged step: accepts it (commits the material

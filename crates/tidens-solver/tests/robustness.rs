@@ -146,9 +146,13 @@ fn a_run_resumed_from_a_checkpoint_goes_on_bit_for_bit() {
     }
     let saved = first.checkpoint();
     assert!(saved.exact() && saved.step() == 40);
+    let spent = first.stats().wall_seconds;
+    assert!(spent > 0.0);
     drop(first);
     let read = Checkpoint::from_bytes(&saved.to_bytes().unwrap()).unwrap();
     let mut resumed = Simulation::resume(&scene, material, settings.clone(), &read).unwrap();
+    // The time the first 40 steps took goes on with them.
+    assert_eq!(resumed.stats().wall_seconds, spent);
     while resumed.status() == Status::Running {
         resumed.advance().unwrap();
     }
@@ -161,6 +165,7 @@ fn a_run_resumed_from_a_checkpoint_goes_on_bit_for_bit() {
         resumed.stats().factorizations,
         through.stats().factorizations
     );
+    assert!(resumed.stats().wall_seconds > spent);
     // Another material, or other settings, are refused.
     let mut other = settings.clone();
     other.tolerance = 0.01;
