@@ -184,7 +184,8 @@ pub struct ContactSettings {
     /// tangent without curvature keeps the term's positive semi-definite part (see
     /// [`FULL_FOLD`] and the `fold` module). The curvature part is
     /// indefinite; without it
-    /// each term's tangent is positive semi-definite, Newton converges
+    /// each term's tangent is positive semi-definite (but for the terms
+    /// across partly weighted folds, whose weight's part is not), Newton converges
     /// linearly near the contact edge instead of quadratically, but every
     /// iteration's direction is one of descent: on the bcc and fcc cells at
     /// level 2 the runs take 29 and 34 % fewer Newton iterations and 43 and
