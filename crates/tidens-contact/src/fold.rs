@@ -17,18 +17,7 @@
 //! the rest. The solver's tangent leaves out `grad^2 g` (see
 //! [`crate::ContactSettings::curvature_stiffness`]) but keeps the positive
 //! semi-definite part of `a phi grad^2 w` (its eigenvalues below zero set
-//! to zero, over the corners' dofs), and then of the term's whole tangent:
-//! the coupling `a phi' (grad g grad w^T + grad w grad g^T)` is indefinite
-//! too. With the coupling kept whole, 20 of the 49 factorisations of the
-//! 32 spheres' study run from its step-200 checkpoint (level 1, rho =
-//! 0.818) were indefinite (LBL^T), and there the line search took the
-//! full Newton step in 7 of 20 iterations (median 0.13 of it), against
-//! 21 of 29 after a Cholesky factorisation. With the whole term's positive
-//! part, none of its factorisations was indefinite, and the run reached
-//! t = 83.1 s in 48 Newton iterations against 79 to t = 83.0 s; the
-//! octant cells at 15 MPa to rho = 0.9 (level 1) took bcc 350, fcc 223,
-//! sc2 379 and sc 259 iterations against 351, 223, 381 and 259, t(0.9)
-//! within 0.03 %. Where a fold is slight the weight is
+//! to zero, over the corners' dofs). Where a fold is slight the weight is
 //! small, the node presses far into the neighbour's plane before the term
 //! holds it, and `phi`, which grows with the square of the pressure before
 //! the weight, makes `a phi grad^2 w` the term's largest part: in a random
@@ -155,9 +144,8 @@ impl FoldWeight {
     /// the force `a phi grad w` and, if the term has a tangent, `a phi'
     /// (grad g grad w^T + grad w grad g^T)` (`grad g` the penetration's
     /// gradient `grad` over the term's first [`TERM_DOFS`] dofs) and, with
-    /// the Hessian, `a phi grad^2 w`: all of it if `consistent`, else the
-    /// positive semi-definite part of the term's whole tangent, that of
-    /// `a phi grad^2 w` first (module docs). The corners that are not
+    /// the Hessian, `a phi grad^2 w`: all of it if `consistent`, else its
+    /// positive semi-definite part (module docs). The corners that are not
     /// among the term's nodes are appended to its dofs.
     pub(crate) fn add_to(
         &self,
@@ -246,17 +234,6 @@ impl FoldWeight {
                             k[(3 * pr + i) * n + 3 * pc + j] += hw[(3 * r + i, 3 * c + j)];
                         }
                     }
-                }
-            }
-        }
-        if !consistent {
-            // The coupling `a phi' (grad g grad w^T + grad w grad g^T)` is
-            // indefinite whatever the weight's Hessian: the solver's
-            // tangent keeps the term's positive semi-definite part.
-            let m = positive_part(DMatrix::from_row_slice(n, n, &k));
-            for i in 0..n {
-                for j in 0..n {
-                    k[i * n + j] = 0.5 * (m[(i, j)] + m[(j, i)]);
                 }
             }
         }

@@ -181,7 +181,7 @@ pub struct ContactSettings {
     /// `a eps dg/du dg/du^T`. A term across a partly weighted fold carries
     /// the derivatives of its weight `w` either way: the coupling `a phi'
     /// (dg/du dw/du^T + dw/du dg/du^T)` and `a phi d2w/du2`, of which the
-    /// tangent without curvature keeps the term's positive semi-definite part (see
+    /// tangent without curvature keeps the positive semi-definite part (see
     /// [`FULL_FOLD`] and the `fold` module). The curvature part is
     /// indefinite; without it
     /// each term's tangent is positive semi-definite (but for the terms
