@@ -137,7 +137,11 @@ const NEAR_FACET_SLACK: f64 = 0.1;
 /// LBL^T, against 4), but its consistent tangent was off the residual's
 /// differences by 1.5e-3 of its size (bcc in the ramp); a Gauss-Newton
 /// form of the coupling (positive semi-definite) failed at rho = 0.79 on
-/// sc.
+/// sc. The solver's tangent now keeps the positive semi-definite part of
+/// each such term's whole tangent (see the `fold` module), which fails on
+/// sc too unless a pair of facets sharing one corner only has its weight
+/// go to zero where it stops being a valley (the `fold` module's
+/// `weight_of`).
 pub const FULL_FOLD: f64 = 0.02;
 
 /// A fold below this (the sine of its angle) is flat: round-off decides
@@ -181,7 +185,7 @@ pub struct ContactSettings {
     /// `a eps dg/du dg/du^T`. A term across a partly weighted fold carries
     /// the derivatives of its weight `w` either way: the coupling `a phi'
     /// (dg/du dw/du^T + dw/du dg/du^T)` and `a phi d2w/du2`, of which the
-    /// tangent without curvature keeps the positive semi-definite part (see
+    /// tangent without curvature keeps the term's positive semi-definite part (see
     /// [`FULL_FOLD`] and the `fold` module). The curvature part is
     /// indefinite; without it
     /// each term's tangent is positive semi-definite (but for the terms
@@ -1212,7 +1216,9 @@ impl ParticleContact {
     /// there deeper than it is and alone holds it off both.
     ///
     /// The weight is a smooth step of the sine of the angle between the
-    /// facets' normals (see [`FULL_FOLD`]).
+    /// facets' normals (see [`FULL_FOLD`]), and, for facets that share a
+    /// corner only, of each far corner's elevation above the other's
+    /// plane, so that it goes to zero where the valley ends.
     fn fold(&self, x: &[f64], m: usize, f: usize, g: usize) -> Option<f64> {
         let master = &self.surfaces[m];
         if self.settings.mode != ContactMode::Frictionless
@@ -1240,7 +1246,9 @@ impl ParticleContact {
         if !(outside(&tg, &qg, &tf, nf) && outside(&tf, &qf, &tg, ng)) {
             return None;
         }
-        Some(fold::weight(sine))
+        let nodes = [tf[0], tf[1], tf[2], tg[0], tg[1], tg[2]];
+        let corners = [qf[0], qf[1], qf[2], qg[0], qg[1], qg[2]];
+        Some(fold::weight(nodes, corners))
     }
 
     /// The weight of the term across the fold between facets `f` and `g`

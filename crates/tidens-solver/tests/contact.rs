@@ -490,8 +490,9 @@ fn press_to(
 /// only in how the contacts are held (the octant's on rigid mirror planes,
 /// the sphere's on its periodic images by the penalty contact) and in the
 /// steps taken. Measured at level 1: t(0.6) 13.63 s against 13.64 s (-0.03
-/// %), and to rho = 0.8 in 148 steps and 922 Newton iterations
-/// (`benches/periodic.py --cells sc --until 0.8`). Without the
+/// %), and to rho = 0.8 in 133 steps and 551 Newton iterations
+/// (`benches/periodic.py --cells sc --until 0.8`; 148 and 922 before the
+/// fold terms' tangent was made positive semi-definite). Without the
 /// hold on the sphere's rotation (the drag alone) t(0.6) was 13.11 s (3.8
 /// % off); with the hold ten times weaker it failed at rho = 0.567.
 #[test]
@@ -522,8 +523,8 @@ fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell() {
     assert!((t_p / t_o - 1.0).abs() < 0.01, "t(0.6) {t_p} against {t_o}");
     // Past rho = 0.7 (where the sphere once stalled, see `FULL_FOLD`),
     // within the two runs' estimates of their time-stepping errors. At
-    // level 1: t(0.7) = 81.09 s against 82.05 s (estimates 1.97 and
-    // 3.56 s), t(0.75) = 146.68 s against 146.50 s (2.71 and 4.72 s).
+    // level 1 (`benches/periodic.py`): t(0.7) = 81.72 s against 82.05 s,
+    // t(0.75) = 146.2 s against 146.6 s.
     for rho in [0.65, 0.7, 0.75] {
         let error = |c: &[tidens_solver::CurvePoint]| {
             c.iter()
