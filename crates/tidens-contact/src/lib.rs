@@ -26,9 +26,10 @@
 //!   exact: the derivatives of the penetration are written in closed form in
 //!   [`mod@penetration`]. The curvature part `(lambda + eps p) d2p/du2` is
 //!   indefinite; [`ContactSettings::curvature_stiffness`] says whether the
-//!   tangent carries it (the consistent tangent) or leaves it out (a positive
-//!   semi-definite one but for the coupling of the terms across partly
-//!   weighted folds, see [`FULL_FOLD`]; the solver leaves it out). Between Newton solves,
+//!   tangent carries it (the consistent tangent) or leaves it out (each
+//!   term's tangent positive semi-definite, that of a term across a partly
+//!   weighted fold by its eigenvalues below zero set to zero, see
+//!   [`FULL_FOLD`]; the solver leaves it out). Between Newton solves,
 //!   [`ParticleContact::augment`] updates the multipliers (Uzawa) until the
 //!   penetration is below its tolerance.
 //! - within a step each node keeps the facets it was paired with at the
@@ -188,8 +189,7 @@ pub struct ContactSettings {
     /// tangent without curvature keeps the term's positive semi-definite part (see
     /// [`FULL_FOLD`] and the `fold` module). The curvature part is
     /// indefinite; without it
-    /// each term's tangent is positive semi-definite (but for the terms
-    /// across partly weighted folds, whose weight's part is not), Newton converges
+    /// each term's tangent is positive semi-definite, Newton converges
     /// linearly near the contact edge instead of quadratically, but every
     /// iteration's direction is one of descent: on the bcc and fcc cells at
     /// level 2 the runs take 29 and 34 % fewer Newton iterations and 43 and
