@@ -8,8 +8,17 @@
 //! Bunch-Kaufman LBL^T factorisation, which handles indefinite symmetric
 //! matrices; indefinite tangents come in runs, so after a failed Cholesky
 //! the next three factorisations use LBL^T directly (exact on positive-definite
-//! matrices too). Sequential kernels keep the result identical for any
-//! thread count.
+//! matrices too).
+//!
+//! A large Cholesky factorisation (from [`PARALLEL_FACTOR_ENTRIES`] entries
+//! on) runs on the threads of the current rayon pool (`RAYON_NUM_THREADS`;
+//! all cores by default). faer still visits the supernodes in order and
+//! splits only each dense update among the threads, by blocks of its
+//! output, so every entry is summed in the same order and the factor is the
+//! same to the last bit for any thread count. Smaller factors stay on one
+//! thread, where a second one costs more than it gains. LBL^T and the
+//! triangular solves stay sequential: faer's LBL^T on two threads gave a
+//! factor that differed in its last bits.
 //!
 //! The fill-reducing ordering is nested dissection (METIS on the graph of
 //! the nodes, see `ordering`), not faer's AMD: on these 3D meshes it halves
@@ -87,6 +96,17 @@ pub struct FactorizationCounts {
 /// After an indefinite matrix, Cholesky is tried on every this-many-th
 /// factorisation only (LBL^T directly on the others).
 const LLT_RETRY: usize = 4;
+
+/// Factor entries from which the Cholesky factorisation uses every thread
+/// of the rayon pool. Median on one thread against two, the 2-core machine
+/// otherwise idle: on blocks of 8-node hexahedra (3 dofs a node, a scratch
+/// probe) 2.4e6 factor entries 0.035 against 0.037 s, 1.2e7 0.23 against
+/// 0.20 s, 3.8e7 0.99 against 0.75 s, 1.3e8 5.6 against 3.8 s, 1.9e8 9.6
+/// against 6.6 s; on real tangents, sc at level 3 (1.6e6 entries, `cargo
+/// bench -p tidens-solver --bench linear`) 19.4 against 24.7 ms, and 32
+/// random spheres pressed to rho = 0.894 (mesh level 1, 361 801 equations,
+/// 1.84e8 entries, a scratch resume of a study run) 10.6 against 7.4 s.
+pub const PARALLEL_FACTOR_ENTRIES: usize = 10_000_000;
 
 /// The numeric factor of the last factorised matrix.
 enum Numeric {
@@ -223,7 +243,12 @@ impl LinearSolver {
             .symbolic
             .as_ref()
             .ok_or(LinearError::NotFactorized("a numeric factorisation"))?;
-        let par = Par::Seq;
+        let threads = rayon::current_num_threads();
+        let par = if threads > 1 && self.values.len() >= PARALLEL_FACTOR_ENTRIES {
+            Par::rayon(threads)
+        } else {
+            Par::Seq
+        };
         // Indefinite tangents come in runs (the iterates of a hard step, with
         // large plastic increments): a failed Cholesky costs up to a whole
         // factorisation, so after an indefinite one the next goes straight
@@ -258,6 +283,9 @@ impl LinearSolver {
         let mut subdiag = vec![0.0; n];
         let mut fwd = vec![0usize; n];
         let mut bwd = vec![0usize; n];
+        // Sequential: faer's LBL^T on two threads gave another factor (the
+        // test below, at 1.2e7 entries).
+        let par = Par::Seq;
         let mut scratch = buffer(
             symbolic.factorize_numeric_intranode_lblt_scratch::<f64>(par, Default::default()),
             "factorisation workspace",
@@ -395,6 +423,36 @@ mod tests {
             s.add(d, d, diagonal);
         }
         s
+    }
+
+    /// The factor and the solution are the same to the last bit on one
+    /// thread and on two, Cholesky and LBL^T, on a system large enough for
+    /// the Cholesky factorisation to use both.
+    #[test]
+    fn the_factor_is_the_same_on_one_thread_and_on_two() {
+        let factor_on = |threads: usize, diagonal: f64| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let a = hex_block(18, diagonal);
+                let mut solver = LinearSolver::default();
+                let kind = solver.factorize(&a).unwrap();
+                assert!(solver.factor_entries() >= PARALLEL_FACTOR_ENTRIES);
+                let mut x: Vec<f64> = (0..a.dim()).map(|i| (i as f64 * 0.37).sin()).collect();
+                solver.solve(&mut x).unwrap();
+                (kind, solver.values.clone(), x)
+            })
+        };
+        for (diagonal, kind) in [(0.1, Factorization::Llt), (-0.3, Factorization::Lblt)] {
+            let one = factor_on(1, diagonal);
+            let two = factor_on(2, diagonal);
+            assert_eq!(one.0, kind);
+            assert_eq!(two.0, kind);
+            assert!(one.1 == two.1, "{kind:?}: the factors differ");
+            assert!(one.2 == two.2, "{kind:?}: the solutions differ");
+        }
     }
 
     #[test]

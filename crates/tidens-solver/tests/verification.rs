@@ -304,8 +304,10 @@ fn extreme_cases_stay_physical() {
 }
 
 /// Results do not depend on the number of threads: elements are evaluated
-/// in parallel but summed in a fixed order, and the factorisation is
-/// sequential. The curves of one and two threads agree to the last bit.
+/// in parallel but summed in a fixed order (this cell's factor is below the
+/// size from which Cholesky runs on several threads; the `linear` module's
+/// tests check that one on one and two threads). The curves of one and
+/// two threads agree to the last bit.
 #[test]
 fn results_are_identical_across_thread_counts() {
     let run = |threads: usize| {
