@@ -13,11 +13,11 @@
 //! A large Cholesky factorisation (from [`PARALLEL_FACTOR_ENTRIES`] entries
 //! on) runs on the threads of the current rayon pool (`RAYON_NUM_THREADS`;
 //! all cores by default). faer still visits the supernodes in order and
-//! splits each dense update among the threads by blocks of its output; the
-//! factor and the solution came out the same to the last bit on one thread
-//! and on two at every size tried (blocks of hexahedra with 1.2e7, 3.8e7
-//! and 1.3e8 factor entries; the test below), so results do not depend on
-//! the thread count. Smaller factors stay on one thread, where a second
+//! splits each dense update among the threads by blocks of its output; on
+//! one thread and on two the factor and the solution came out the same to
+//! the last bit in the test below (1.2e7 factor entries), and the solution
+//! did on blocks of hexahedra with 3.8e7 and 1.3e8 entries, so results do
+//! not depend on the thread count. Smaller factors stay on one thread, where a second
 //! one costs more than it gains. LBL^T and the triangular solves stay
 //! sequential: faer's LBL^T on two threads gave a factor that differed in
 //! its last bits.
