@@ -187,7 +187,9 @@ class Result:
         the bulk modulus K, with a factor 2 for the lateral stresses),
         ``penetration_ok`` (the largest penetration over the largest
         particle semi-axis, ``max_penetration_over_radius``, within the
-        contact's ``penetration_tolerance``), ``depth_ok`` (the largest
+        contact's ``penetration_tolerance``; the penetration as the contact
+        enforces it, a term across a fold between two facets counted at
+        its weight), ``depth_ok`` (the largest
         depth of any surface node inside another particle, the curve's
         ``max_depth_mm`` over the same radius, ``max_depth_over_radius``,
         within the same tolerance: parry's signed distance, whether a

@@ -195,11 +195,36 @@ fn the_term_across_a_fold_weighs_in_with_the_fold() {
     // over its distance from the diagonal, sqrt(2) rise / (1/2 + rise^2).
     let rise_for = |sine: f64| (2f64.sqrt() - (2.0 - 2.0 * sine * sine).sqrt()) / (2.0 * sine);
     let t = 0.1;
-    let w = weight(rise_for(t * tidens_contact::FULL_FOLD)).unwrap();
+    let rise = rise_for(t * tidens_contact::FULL_FOLD);
+    let w = weight(rise).unwrap();
     let expected = t.powi(4) * (35.0 - 84.0 * t + 70.0 * t * t - 20.0 * t.powi(3));
     assert!(
         (w - expected).abs() < 1e-9 * expected,
         "{w} against {expected}"
     );
+    // The evaluation's largest penetration counts the term across the
+    // fold at its weight, as the augmented Lagrangian enforces it: the
+    // node, past the fold, reads deeper on the neighbour's plane than on
+    // its link's, but its weighted reading is the smaller.
+    let (mut nodes, surfaces) = fold(rise, start);
+    let mut c = contact(surfaces);
+    let flat = |nodes: &[[f64; 3]]| nodes.iter().flatten().copied().collect::<Vec<f64>>();
+    c.pair(&flat(&nodes));
+    for node in &mut nodes[4..] {
+        for i in 0..3 {
+            node[i] += p[i] - start[i];
+        }
+    }
+    let eval = c.evaluate(&flat(&nodes), false);
+    let mine: Vec<_> = eval.terms.iter().filter(|t| t.slave == (1, 0)).collect();
+    let (own, across) = (mine[0].penetration, mine[1].penetration);
+    assert!(across > own && w * across < own, "{own} {across}");
+    let others = eval
+        .terms
+        .iter()
+        .filter(|t| t.slave != (1, 0))
+        .map(|t| t.fold.map_or(1.0, |(_, w)| w) * t.penetration)
+        .fold(0.0, f64::max);
+    assert_eq!(eval.max_penetration(), own.max(others));
     assert_eq!(weight(rise_for(2.0 * tidens_contact::FULL_FOLD)), Some(1.0));
 }
