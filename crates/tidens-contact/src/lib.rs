@@ -239,6 +239,15 @@ pub struct ContactTerm {
     pub fold: Option<(usize, f64)>,
 }
 
+impl ContactTerm {
+    /// The term's weight: that of its fold for a term across a fold (see
+    /// [`ContactTerm::fold`]), one otherwise. The augmented Lagrangian
+    /// enforces the term's penetration times it.
+    pub fn weight(&self) -> f64 {
+        self.fold.map_or(1.0, |(_, w)| w)
+    }
+}
+
 /// A term across a fold: its place in the ring of the link's facet
 /// `from`, and its weight (see [`FULL_FOLD`]).
 #[derive(Clone, Copy, Debug)]
@@ -374,7 +383,7 @@ impl ContactEvaluation {
     pub fn max_penetration(&self) -> f64 {
         self.terms
             .iter()
-            .map(|t| t.fold.map_or(1.0, |(_, w)| w) * t.penetration)
+            .map(|t| t.weight() * t.penetration)
             .fold(0.0, f64::max)
     }
 
@@ -385,8 +394,7 @@ impl ContactEvaluation {
         self.terms
             .iter()
             .map(|t| {
-                let weight = t.fold.map_or(1.0, |(_, w)| w);
-                weight
+                t.weight()
                     * if t.pressure > 0.0 {
                         t.penetration.abs()
                     } else {
