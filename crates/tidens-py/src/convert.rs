@@ -160,6 +160,7 @@ pub(crate) fn stats_dict<'py>(py: Python<'py>, s: &RunStats) -> PyResult<Bound<'
     dict.set_item("failed_attempts", s.failed_attempts)?;
     dict.set_item("llt_factorizations", s.factorizations.llt)?;
     dict.set_item("lblt_factorizations", s.factorizations.lblt)?;
+    dict.set_item("single_precision_factorizations", s.factorizations.single)?;
     dict.set_item("pattern_rebuilds", s.pattern_rebuilds)?;
     dict.set_item("evaluation_seconds", s.evaluation_seconds)?;
     dict.set_item("contact_seconds", s.contact_seconds)?;

@@ -665,7 +665,9 @@ impl PySimulation {
     }
 
     /// Run totals: steps, newton_iterations, rejected_steps, failed_attempts,
-    /// llt_factorizations, lblt_factorizations, pattern_rebuilds (times the
+    /// llt_factorizations, lblt_factorizations,
+    /// single_precision_factorizations (of the llt ones, those in single
+    /// precision, whose solves are refined in double), pattern_rebuilds (times the
     /// sparsity pattern grew for new particle contacts, each a symbolic
     /// factorisation), evaluations, tangent_evaluations (counts), the wall
     /// times evaluation_seconds, contact_seconds, assembly_seconds,
