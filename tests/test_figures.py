@@ -138,6 +138,7 @@ def test_the_random_packings_figure_plans_its_packings_first_and_draws_their_con
         cell = runs.jobs[name].case.cell
         assert cell.is_periodic and len(cell.particles) == figures.RANDOM_PARTICLES
         assert runs.jobs[name].case.solver.mesh_level == figures.RANDOM_LEVEL
+        assert runs.jobs[name].case.solver.checkpoint_every == figures.RANDOM_CHECKPOINT_EVERY
     radii = {p[1] for p in runs.jobs[bimodal].case.cell.particles}
     assert max(radii) / min(radii) == pytest.approx(figures.RANDOM_BIMODAL[0], rel=1e-12)
     # The packings, hours long, start first.
@@ -156,3 +157,11 @@ def test_the_random_packings_figure_plans_its_packings_first_and_draws_their_con
     cells = [c.strip() for c in row.strip("|").split("|")]
     assert cells[1:6] == ["1", f"{stand_in.rho0:.4f}", "6.00", "6.00", "reached_density"]
     assert cells[10] == f"{s['continuum_times_to_density_s']['0.8']:.1f} s"
+
+
+def test_a_run_that_failed_is_reported_with_its_reason() -> None:
+    row = {"name": "random32", "status": "failed", "wall_seconds": None,
+           "reason": "worker exited with status 1: ValueError: checkpoint: taken with other solver settings"}
+    assert figures.row_line(row).endswith(": failed (-): " + row["reason"])
+    row.update(status="reached_density", wall_seconds=12.0, reason=None)
+    assert figures.row_line(row) == f"  random32: reached_density ({figures._seconds(12.0)})"

@@ -156,6 +156,46 @@ def test_a_run_stopped_in_the_middle_resumes_to_the_same_curve_bit_for_bit(tmp_p
     assert names == [name for _, name in io.read_pvd(tmp_path / "through" / "fields.pvd")]
 
 
+def test_a_run_resumed_with_another_checkpoint_interval_records_and_keeps_it(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    case = td.Case(
+        cell=td.cells.bcc(),
+        material=td.materials.TI64_CREEP_1293K,
+        stress_mpa=15.0,
+        solver=td.SolverSettings(mesh_level=1, tolerance=0.02, checkpoint_every=10),
+    )
+    through = case.run(until_density=0.8, out_dir=tmp_path / "through", error_estimate=False)
+
+    def ctrl_c(point: dict[str, float]) -> None:
+        if point["step"] >= 23:
+            raise KeyboardInterrupt
+
+    out = tmp_path / "stopped"
+    with pytest.raises(KeyboardInterrupt):
+        case.run(until_density=0.8, out_dir=out, callback=ctrl_c, error_estimate=False)
+    record = (out / "run.json").read_text()
+    with pytest.raises(ValueError, match="checkpoint_every"):
+        td.resume(out, checkpoint_every=-1)
+    assert (out / "run.json").read_text() == record
+    # Checkpoints every 4 steps from step 20 on: the run records it, goes
+    # on from step 20 as the through run did, parts from it where it first
+    # drops its cached factor the through run kept (step 24), and reaches
+    # rho = 0.8 at the same time to round-off (5.6e-7 relative, measured).
+    assert main(["run", "--resume", str(out), "--checkpoint-every", "4", "--quiet", "--no-plot"]) == 0
+    assert "resumed" in capsys.readouterr().out
+    assert json.loads((out / "run.json").read_text())["case"]["solver"]["checkpoint_every"] == 4
+    resumed = td.load(out)
+    assert resumed.status == "reached_density"
+    for column, values in through.curve.items():
+        assert np.array_equal(values[:25], resumed.curve[column][:25], equal_nan=True), column
+    assert not np.array_equal(through.time_s, resumed.time_s)
+    t_through, t_resumed = through.time_to_density(0.8), resumed.time_to_density(0.8)
+    assert t_resumed == pytest.approx(t_through, rel=1e-4)
+    # The last checkpoint is the last step that is a multiple of 4.
+    sim = case.simulation(0.8, None, [], resume_from=(out / "checkpoint.bin").read_bytes())
+    steps = len(resumed.time_s) - 1
+    assert len(sim.curve()["time_s"]) - 1 == steps - steps % 4
+
+
 def test_resume_refuses_a_folder_without_a_run_and_case_options(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(FileNotFoundError, match="no run to resume"):
         td.resume(tmp_path)

@@ -79,6 +79,13 @@ def test_a_restarted_sweep_resumes_an_interrupted_point_and_skips_finished_ones(
     stamp = (folder / "summary.json").stat().st_mtime_ns
     [again] = sweep.run(base(), tmp_path, until_density=UNTIL, workers=1, error_estimate=False)
     assert (folder / "summary.json").stat().st_mtime_ns == stamp and again["t_0.7_s"] == row["t_0.7_s"]
+    # A point whose checkpoint interval changed is the same point: an
+    # interrupted run of it goes on with the new interval.
+    (folder / "summary.json").unlink()
+    often = td.Case.from_dict({**base().as_dict(), "solver": {**QUICK.as_dict(), "checkpoint_every": 7}})
+    [row] = sweep.run(often, tmp_path, until_density=UNTIL, workers=1, error_estimate=False)
+    assert row["status"] == "reached_density"
+    assert json.loads((folder / "run.json").read_text())["case"]["solver"]["checkpoint_every"] == 7
     # A folder of another case is not taken for the point's.
     with pytest.raises(FileExistsError, match=point.name):
         sweep.run(base(), tmp_path, until_density=0.7, workers=1)

@@ -674,6 +674,7 @@ def resume(
     *,
     progress: bool = False,
     callback: ProgressCallback | None = None,
+    checkpoint_every: int | None = None,
 ) -> Result:
     """Goes on with the run whose outputs are in ``out_dir``, from its last
     checkpoint (``checkpoint.bin``, written at the start and every
@@ -684,9 +685,15 @@ def resume(
     fields are those the uninterrupted run would have written: to the bit
     when the checkpoint was taken at a multiple of
     ``SolverSettings.checkpoint_every`` steps, within the Newton tolerance
-    otherwise. Raises FileNotFoundError when the folder
-    holds no run to resume, ValueError for a checkpoint of another case or
-    version."""
+    otherwise. ``checkpoint_every`` (default: the recorded one) sets the
+    steps between checkpoints from here on, for a run whose steps turned
+    out longer or shorter than expected; ``run.json`` then records it. The
+    run goes on as one with that interval would from the checkpoint (the
+    interval says only where the solver drops its cached factor, which
+    moves a curve at round-off level, see ``SolverSettings``). Raises
+    FileNotFoundError when the folder holds no run to resume, ValueError
+    for a checkpoint of another case or version, TypeError or ValueError
+    for a ``checkpoint_every`` that is not a whole number >= 0."""
     out = _out_dir(out_dir)
     if out is None:
         raise TypeError("out_dir = None: give the folder of the run to resume")
@@ -703,8 +710,13 @@ def resume(
         until_density, until_time_s = args["until_density"], args["until_time_s"]
     except (ValueError, TypeError, KeyError) as e:
         raise ValueError(f"{run_file}: not the record of a run ({type(e).__name__}: {e})") from e
+    recorded = case
+    if checkpoint_every is not None:
+        case = replace(case, solver=replace(case.solver, checkpoint_every=checkpoint_every))
     earlier = [(t, name) for t, name in io.read_pvd(out / "fields.pvd") if name != "fields_final.vtu"]
     sim = case.simulation(until_density, until_time_s, args["snapshot_times_s"], resume_from=checkpoint.read_bytes())
+    if case != recorded:
+        io.write_json(run_file, {**data, "case": case.as_dict()})
     result, error = case._press(
         until_density,
         until_time_s,

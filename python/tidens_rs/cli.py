@@ -153,7 +153,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("output")
     g.add_argument("--out", type=_folder, help="output folder, new or empty (see --overwrite); required but with --resume")
     g.add_argument("--resume", type=_folder, metavar="DIR", help="go on with the run in DIR from its last checkpoint (written at the start and every --checkpoint-every steps), with the case it recorded: no other case option")
-    g.add_argument("--checkpoint-every", type=int, default=_DEFAULTS.checkpoint_every, help=f"steps between checkpoints in --out, from which --resume goes on bit for bit (the solver drops its cached factor there; default {_DEFAULTS.checkpoint_every}); 0: checkpoints every 50 steps and at any stop, resumed within the Newton tolerance")
+    g.add_argument("--checkpoint-every", type=int, default=None, help=f"steps between checkpoints in --out, from which --resume goes on bit for bit (the solver drops its cached factor there; default {_DEFAULTS.checkpoint_every}); 0: checkpoints every 50 steps and at any stop, resumed within the Newton tolerance; with --resume, from the checkpoint on (default: the run's)")
     g.add_argument("--overwrite", action="store_true", help="first delete the outputs of an earlier run in --out (curve, summary, fields, plot; nothing else)")
     g.add_argument("--vtu-densities", type=_float_list, help="comma-separated densities for VTU snapshots (default those of 0.6,0.7,0.8,0.9 above the cell's rho0)")
     g.add_argument("--vtu-times", type=_float_list, default=[], help="comma-separated times [s] for VTU snapshots")
@@ -293,7 +293,7 @@ def _resume(args: argparse.Namespace) -> int:
     if not args.no_plot:
         threading.Thread(target=_import_matplotlib, daemon=True).start()
     try:
-        result = resume(out, progress=not args.quiet)
+        result = resume(out, progress=not args.quiet, checkpoint_every=args.checkpoint_every)
     except ConvergenceError as e:
         print(f"tidens: solver failure: {e} (partial results in {out})", file=sys.stderr)
         return 3
@@ -335,7 +335,7 @@ def _run(args: argparse.Namespace) -> int:
             element=args.element,
             contact_facets=args.contact_facets,
             max_steps=args.max_steps,
-            checkpoint_every=args.checkpoint_every,
+            checkpoint_every=args.checkpoint_every if args.checkpoint_every is not None else _DEFAULTS.checkpoint_every,
         ),
     )
     # The default snapshot densities start at 0.6, below rho0 of the denser packings.

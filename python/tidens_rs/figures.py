@@ -101,6 +101,10 @@ RANDOM_BIMODAL: tuple[float, float] = (1.566, 0.5)
 # Their mesh level, whatever the figures' level (32 particles at level 1
 # are 144094 unknowns), and the lattice cells drawn beside them.
 RANDOM_LEVEL = 1
+# Steps between their checkpoints: a step of 32 spheres takes a minute or
+# more, so that a run stopped between two checkpoints loses at most ten
+# (a run interrupted under another interval goes on with this one).
+RANDOM_CHECKPOINT_EVERY = 10
 RANDOM_LATTICES: tuple[str, ...] = ("sc", "bcc", "fcc")
 CPTI_ALPHA_KNOCKDOWN = 0.17
 # (preset, stress [MPa], knock-down, computed): the paper's CP-Ti conditions.
@@ -218,13 +222,24 @@ class Runs:
             cell=cells_module.random(RANDOM_PARTICLES, seed=RANDOM_SEED, **kw),
             material=presets.by_name(CREEP),
             stress_mpa=STUDY_STRESS_MPA,
-            solver=SolverSettings(mesh_level=RANDOM_LEVEL, tolerance=accuracy_ladder_tolerance(RANDOM_LEVEL)),
+            solver=SolverSettings(
+                mesh_level=RANDOM_LEVEL,
+                tolerance=accuracy_ladder_tolerance(RANDOM_LEVEL),
+                checkpoint_every=RANDOM_CHECKPOINT_EVERY,
+            ),
         )
         self.jobs[name] = Job(name, case)
         return name
 
     def result(self, name: str) -> Result | None:
         return self.results.get(name)
+
+
+def row_line(row: dict[str, Any]) -> str:
+    """The line ``tidens figures`` prints for a finished run of its sweep:
+    name, status and wall time, and why it stopped where the run says."""
+    line = f"  {row['name']}: {row['status']} ({_seconds(row.get('wall_seconds'))})"
+    return f"{line}: {row['reason']}" if row.get("reason") else line
 
 
 def random_job_name(bimodal: tuple[float, float] | None) -> str:
@@ -312,7 +327,7 @@ def make(
         until_density=UNTIL_DENSITY,
         workers=workers,
         progress=progress,
-        on_row=lambda row: say(f"  {row['name']}: {row['status']} ({_seconds(row.get('wall_seconds'))})"),
+        on_row=lambda row: say(row_line(row)),
     )
     for row in table:
         folder = Path(row["folder"])

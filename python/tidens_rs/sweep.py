@@ -259,7 +259,7 @@ def run_point(
         if status in FINISHED or status == "failed":
             reason = (summary or {}).get("message") or ""  # done earlier
         elif started and status in (None, "interrupted"):
-            resume(folder)
+            resume(folder, checkpoint_every=Case.from_dict(point.case).solver.checkpoint_every)
         else:
             Case.from_dict(point.case).run(
                 until_density,
@@ -337,12 +337,20 @@ def _check_folder(folder: Path, point: Point, until_density: float | None, until
         return
     except (OSError, ValueError) as e:
         raise ValueError(f"{folder / 'run.json'}: not the record of a run ({e}); delete {folder} to run the point afresh") from e
-    same_case = _plain(recorded.get("case")) == _plain(point.case)
+    same_case = _without_interval(_plain(recorded.get("case"))) == _without_interval(_plain(point.case))
     args = recorded.get("run", {})
     same_stop = (args.get("until_density"), args.get("until_time_s")) == (until_density, until_time_s)
     if not (same_case and same_stop):
         what = "case" if not same_case else "stop (until_density, until_time_s)"
         raise FileExistsError(f"{folder} holds a run of another {what}: give another folder for the sweep, or delete {folder}")
+
+
+def _without_interval(case: Any) -> Any:
+    """A case's record without its checkpoint interval, which a resumed
+    run may change (see :func:`tidens_rs.resume`)."""
+    if isinstance(case, dict) and isinstance(case.get("solver"), dict):
+        return {**case, "solver": {k: v for k, v in case["solver"].items() if k != "checkpoint_every"}}
+    return case
 
 
 def _plain(data: Any) -> Any:

@@ -117,8 +117,11 @@ impl Simulation {
     }
 
     /// A simulation of `scene` that goes on from `checkpoint`. The stop
-    /// conditions and the step limit are `settings`' (a run can be extended);
-    /// everything else must be what the checkpoint was taken with.
+    /// conditions, the step limit and the checkpoint interval are
+    /// `settings`' (a run can be extended, and checkpointed more or less
+    /// often from here on: the interval only says where the run forgets what
+    /// it keeps for speed); everything else must be what the checkpoint was
+    /// taken with.
     pub fn resume(
         scene: &Scene,
         material: Material,
@@ -129,6 +132,7 @@ impl Simulation {
             until_density: None,
             until_time: None,
             max_steps: 0,
+            checkpoint_every: 0,
             ..s.clone()
         };
         if comparable(&settings) != comparable(&checkpoint.settings) {

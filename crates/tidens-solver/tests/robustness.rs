@@ -166,6 +166,32 @@ fn a_run_resumed_from_a_checkpoint_goes_on_bit_for_bit() {
         through.stats().factorizations
     );
     assert!(resumed.stats().wall_seconds > spent);
+    // Resumed with checkpoints every 10 steps from there on, the run
+    // forgets its factor at steps 50 and 70 too: its path parts from the
+    // through run's after step 50, and its curve stays within a tenth of
+    // the time tolerance of it.
+    let mut often = settings.clone();
+    often.checkpoint_every = 10;
+    let mut resumed = Simulation::resume(&scene, material, often, &read).unwrap();
+    while resumed.status() == Status::Running {
+        resumed.advance().unwrap();
+        if resumed.curve().len() - 1 == 50 {
+            assert!(resumed.checkpoint().exact());
+        }
+    }
+    assert_eq!(resumed.curve()[..=50], through.curve()[..=50]);
+    assert_ne!(resumed.curve(), through.curve());
+    // The time to rho = 0.8, interpolated between the steps about it.
+    let t_at = |c: &[tidens_solver::CurvePoint]| {
+        let i = c.iter().position(|p| p.rel_density >= 0.8).unwrap();
+        let (a, b) = (&c[i - 1], &c[i]);
+        a.time + (b.time - a.time) * (0.8 - a.rel_density) / (b.rel_density - a.rel_density)
+    };
+    let (t_resumed, t_through) = (t_at(resumed.curve()), t_at(through.curve()));
+    assert!(
+        (t_resumed / t_through - 1.0).abs() < 0.1 * settings.tolerance,
+        "{t_resumed} s against {t_through} s"
+    );
     // Another material, or other settings, are refused.
     let mut other = settings.clone();
     other.tolerance = 0.01;
