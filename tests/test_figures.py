@@ -5,6 +5,7 @@ folders, and one figure made end to end on a coarse mesh."""
 import json
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -160,7 +161,7 @@ def test_the_random_packings_figure_plans_its_packings_first_and_draws_their_con
 
 
 def test_a_run_that_failed_is_reported_with_its_reason() -> None:
-    row = {"name": "random32", "status": "failed", "wall_seconds": None,
+    row: dict[str, Any] = {"name": "random32", "status": "failed", "wall_seconds": None,
            "reason": "worker exited with status 1: ValueError: checkpoint: taken with other solver settings"}
     assert figures.row_line(row).endswith(": failed (-): " + row["reason"])
     row.update(status="reached_density", wall_seconds=12.0, reason=None)

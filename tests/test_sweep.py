@@ -52,6 +52,23 @@ def test_every_point_runs_once_in_parallel_into_its_folder_and_the_table(tmp_pat
     assert t5 / t10 == pytest.approx(2**n, rel=0.01)
 
 
+def test_a_point_under_way_is_reported_with_its_last_converged_step(tmp_path: Path) -> None:
+    seen: list[tuple[str, dict[str, float]]] = []
+    [row] = sweep.run(base(), tmp_path, until_density=UNTIL, workers=1, error_estimate=False,
+                      on_point=lambda name, p: seen.append((name, p)), point_every_s=0.02)
+    assert len(seen) >= 2 and {name for name, _ in seen} == {row["name"]}
+    # Each report is a row of the finished curve, the steps in order.
+    curve = np.loadtxt(tmp_path / row["name"] / "curve.csv", delimiter=",", skiprows=1)
+    header = (tmp_path / row["name"] / "curve.csv").read_text().splitlines()[0].split(",")
+    steps = [int(p["step"]) for _, p in seen]
+    assert steps == sorted(steps) and steps[-1] > steps[0]
+    for _, p in seen:
+        k = int(p["step"])
+        assert [p[c] for c in header] == pytest.approx(curve[k], rel=0, abs=0, nan_ok=True)
+    with pytest.raises(ValueError, match="point_every_s"):
+        sweep.run(base(), tmp_path, until_density=UNTIL, workers=1, point_every_s=0)
+
+
 def test_a_restarted_sweep_resumes_an_interrupted_point_and_skips_finished_ones(tmp_path: Path) -> None:
     point = sweep.plan(base())[0]
     folder = tmp_path / point.name

@@ -105,6 +105,8 @@ RANDOM_LEVEL = 1
 # more, so that a run stopped between two checkpoints loses at most ten
 # (a run interrupted under another interval goes on with this one).
 RANDOM_CHECKPOINT_EVERY = 10
+# Seconds between the lines that tell how far each run under way has got.
+POINT_EVERY_S = 600.0
 RANDOM_LATTICES: tuple[str, ...] = ("sc", "bcc", "fcc")
 CPTI_ALPHA_KNOCKDOWN = 0.17
 # (preset, stress [MPa], knock-down, computed): the paper's CP-Ti conditions.
@@ -235,6 +237,12 @@ class Runs:
         return self.results.get(name)
 
 
+def point_line(name: str, point: dict[str, float]) -> str:
+    """The line ``tidens figures`` prints every ``POINT_EVERY_S`` for a run
+    under way: its last converged step."""
+    return f"  {name}: step {point['step']:.0f}, t = {point['time_s']:.4g} s, rho = {point['rel_density']:.4f}"
+
+
 def row_line(row: dict[str, Any]) -> str:
     """The line ``tidens figures`` prints for a finished run of its sweep:
     name, status and wall time, and why it stopped where the run says."""
@@ -328,6 +336,8 @@ def make(
         workers=workers,
         progress=progress,
         on_row=lambda row: say(row_line(row)),
+        on_point=lambda name, p: say(point_line(name, p)),
+        point_every_s=POINT_EVERY_S,
     )
     for row in table:
         folder = Path(row["folder"])

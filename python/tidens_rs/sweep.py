@@ -32,6 +32,7 @@ import math
 import os
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -148,6 +149,8 @@ def run(
     error_estimate: bool = True,
     progress: bool = False,
     on_row: Callable[[dict[str, Any]], None] | None = None,
+    on_point: Callable[[str, dict[str, float]], None] | None = None,
+    point_every_s: float = 60.0,
 ) -> list[dict[str, Any]]:
     """Runs the sweep of :func:`plan` into ``out_dir`` and returns the table
     (one row per point, keys :data:`COLUMNS`), also written to
@@ -155,7 +158,9 @@ def run(
     processes (default: the machine's cores, at most the number of points),
     each running one point at a time on one thread; ``scheduler``: the
     address of a Dask scheduler to run the points on instead. ``on_row`` is
-    called with each row as its point finishes."""
+    called with each row as its point finishes, ``on_point`` every
+    ``point_every_s`` seconds with the last curve point of each point under
+    way (see :func:`execute`)."""
     points = plan(base, stresses_mpa=stresses_mpa, materials=materials, cells=cells, aspect_ratios=aspect_ratios)
     return execute(
         points,
@@ -167,6 +172,8 @@ def run(
         error_estimate=error_estimate,
         progress=progress,
         on_row=on_row,
+        on_point=on_point,
+        point_every_s=point_every_s,
     )
 
 
@@ -181,12 +188,21 @@ def execute(
     error_estimate: bool = True,
     progress: bool = False,
     on_row: Callable[[dict[str, Any]], None] | None = None,
+    on_point: Callable[[str, dict[str, float]], None] | None = None,
+    point_every_s: float = 60.0,
 ) -> list[dict[str, Any]]:
     """Runs ``points`` (from :func:`plan`, or made otherwise: any cases, each
     with a folder name of its own) into ``out_dir`` as :func:`run` does, in
-    the order given (put the longest first to keep the workers busy)."""
+    the order given (put the longest first to keep the workers busy).
+
+    Every ``point_every_s`` seconds, ``on_point(name, point)`` is called
+    with the last curve point (the columns of ``curve.csv``) of each point
+    whose run is under way, as its worker has written it; with
+    ``progress``, the bar shows their densities."""
     if until_density is None and until_time_s is None:
         raise ValueError("give until_density, until_time_s or both")
+    if isinstance(point_every_s, bool) or not isinstance(point_every_s, (int, float)) or not point_every_s > 0:
+        raise ValueError(f"point_every_s = {point_every_s!r}: must be a number of seconds > 0")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers = {workers!r}: must be a whole number >= 1")
     if scheduler is not None and workers is not None:
@@ -220,6 +236,29 @@ def execute(
         if on_row is not None:
             on_row(row)
 
+    watching = bar is not None or on_point is not None
+    stop = threading.Event()
+
+    def watch() -> None:
+        started = time.time()
+        while not stop.wait(point_every_s):
+            running = []
+            for p in points:
+                curve = out / p.name / "curve.csv"
+                if p.name in rows or not _written_since(curve, started):
+                    continue
+                last = _last_point(curve)
+                if last is None:
+                    continue
+                running.append(f"{p.name} rho {last['rel_density']:.4f}")
+                if on_point is not None:
+                    on_point(p.name, last)
+            if bar is not None and running:
+                bar.set_postfix_str("; ".join(running))
+
+    watcher = threading.Thread(target=watch, daemon=True) if watching else None
+    if watcher is not None:
+        watcher.start()
     try:
         if scheduler is not None:
             _run_on_dask(scheduler, args, done)
@@ -234,9 +273,45 @@ def execute(
                     for f in as_completed(futures):
                         done(f.result())
     finally:
+        stop.set()
+        if watcher is not None:
+            watcher.join()
         if bar is not None:
             bar.close()
     return [rows[p.name] for p in points]
+
+
+def _written_since(path: Path, since: float) -> bool:
+    """Whether the file at ``path`` exists and was written after ``since``
+    (a time.time() value)."""
+    try:
+        return path.stat().st_mtime >= since
+    except OSError:
+        return False
+
+
+def _last_point(curve: Path) -> dict[str, float] | None:
+    """The last complete row of a curve file being written (its header's
+    columns, as numbers; empty cells as nan); None before the first."""
+    try:
+        with curve.open("rb") as f:
+            header = f.readline().decode().strip().split(",")
+            f.seek(0, os.SEEK_END)
+            end = f.tell()
+            f.seek(max(0, end - 8192))
+            tail = f.read().decode(errors="replace")
+    except OSError:
+        return None
+    lines = tail.split("\n")[:-1]  # the text after the last newline is not a whole row yet
+    if not lines or lines[-1].strip().split(",") == header:
+        return None
+    values = lines[-1].strip().split(",")
+    if len(values) != len(header):
+        return None
+    try:
+        return {k: float(v) if v != "" else math.nan for k, v in zip(header, values, strict=True)}
+    except ValueError:
+        return None
 
 
 def run_point(
