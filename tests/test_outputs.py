@@ -120,13 +120,29 @@ def test_the_command_line_reports_a_failed_write_in_one_line(
     assert (out / "fields_final.vtu").exists()
 
 
-def test_a_run_stopped_in_the_middle_resumes_to_the_same_curve_bit_for_bit(tmp_path: Path) -> None:
-    case = td.Case(
+def bcc_every_10() -> td.Case:
+    """bcc at level 1 pressed at 15 MPa, checkpoints every 10 steps."""
+    return td.Case(
         cell=td.cells.bcc(),
         material=td.materials.TI64_CREEP_1293K,
         stress_mpa=15.0,
         solver=td.SolverSettings(mesh_level=1, tolerance=0.02, checkpoint_every=10),
     )
+
+
+def stopped_at(case: td.Case, step: int, out: Path) -> None:
+    """Runs ``case`` to rho = 0.8 into ``out`` and stops it (Ctrl-C) at ``step``."""
+
+    def ctrl_c(point: dict[str, float]) -> None:
+        if point["step"] >= step:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        case.run(until_density=0.8, out_dir=out, callback=ctrl_c, error_estimate=False)
+
+
+def test_a_run_stopped_in_the_middle_resumes_to_the_same_curve_bit_for_bit(tmp_path: Path) -> None:
+    case = bcc_every_10()
     through = case.run(until_density=0.8, out_dir=tmp_path / "through", snapshot_densities=[0.72, 0.75])
     steps = through.stats["steps"]
     assert steps > 30
@@ -157,21 +173,10 @@ def test_a_run_stopped_in_the_middle_resumes_to_the_same_curve_bit_for_bit(tmp_p
 
 
 def test_a_run_resumed_with_another_checkpoint_interval_records_and_keeps_it(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    case = td.Case(
-        cell=td.cells.bcc(),
-        material=td.materials.TI64_CREEP_1293K,
-        stress_mpa=15.0,
-        solver=td.SolverSettings(mesh_level=1, tolerance=0.02, checkpoint_every=10),
-    )
+    case = bcc_every_10()
     through = case.run(until_density=0.8, out_dir=tmp_path / "through", error_estimate=False)
-
-    def ctrl_c(point: dict[str, float]) -> None:
-        if point["step"] >= 23:
-            raise KeyboardInterrupt
-
     out = tmp_path / "stopped"
-    with pytest.raises(KeyboardInterrupt):
-        case.run(until_density=0.8, out_dir=out, callback=ctrl_c, error_estimate=False)
+    stopped_at(case, 23, out)
     record = (out / "run.json").read_text()
     with pytest.raises(ValueError, match="checkpoint_every"):
         td.resume(out, checkpoint_every=-1)
@@ -194,6 +199,26 @@ def test_a_run_resumed_with_another_checkpoint_interval_records_and_keeps_it(tmp
     sim = case.simulation(0.8, None, [], resume_from=(out / "checkpoint.bin").read_bytes())
     steps = len(resumed.time_s) - 1
     assert len(sim.curve()["time_s"]) - 1 == steps - steps % 4
+
+
+def test_a_run_without_a_summary_loads_as_far_as_it_got(tmp_path: Path) -> None:
+    out = tmp_path / "run"
+    stopped_at(bcc_every_10(), 15, out)
+    stopped = td.load(out)
+    # As a killed run leaves it: no summary, the next row begun.
+    (out / "summary.json").unlink()
+    with (out / "curve.csv").open("a") as f:
+        f.write("0.51,0.7")
+    partial = td.load(out)
+    assert partial.status == "interrupted" and "no summary.json" in (partial.message or "")
+    assert len(partial.time_s) == 16
+    for column, values in stopped.curve.items():
+        assert np.array_equal(values, partial.curve[column], equal_nan=True), column
+    assert (partial.degrees_of_freedom, partial.nodes, partial.elements) == (
+        stopped.degrees_of_freedom, stopped.nodes, stopped.elements)
+    # Its totals are the last checkpoint's: step 10.
+    assert partial.stats["steps"] == 10 and 0 < partial.stats["newton_iterations"] < stopped.stats["newton_iterations"]
+    assert "step 15" in (partial.message or "") and "step 10" in (partial.message or "")
 
 
 def test_resume_refuses_a_folder_without_a_run_and_case_options(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

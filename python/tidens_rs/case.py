@@ -742,12 +742,20 @@ def load(out_dir: str | Path) -> Result:
     """The result of the run whose outputs are in ``out_dir`` (its record
     ``run.json``, ``curve.csv`` and ``summary.json``): the case, the curve,
     the status, the cost and the error estimate, without the fields (read
-    those from the VTU files). Raises FileNotFoundError when the folder holds
-    no finished or stopped run, ValueError when its files are not a run's."""
+    those from the VTU files).
+
+    A run that has written no summary yet (still going, or killed) loads
+    as what it has written: its curve to the last converged step, status
+    ``interrupted``, its totals (``stats``) as of its last checkpoint, the
+    mesh sizes from its case; ``message`` says so. Raises
+    FileNotFoundError when the folder holds no run, ValueError when its
+    files are not a run's."""
     out = _out_dir(out_dir)
     if out is None:
         raise TypeError("out_dir = None: give the folder of a run")
     files = [out / RUN_FILE, out / "curve.csv", out / "summary.json"]
+    if files[0].exists() and files[1].exists() and not files[2].exists():
+        return _load_unfinished(out)
     missing = [p.name for p in files if not p.exists()]
     if missing:
         raise FileNotFoundError(f"{out}: no run to load ({' and '.join(missing)} missing)")
@@ -772,6 +780,33 @@ def load(out_dir: str | Path) -> Result:
     except (ValueError, TypeError, KeyError) as e:
         raise ValueError(f"{out}: not the outputs of a run ({type(e).__name__}: {e})") from e
     return result
+
+
+def _load_unfinished(out: Path) -> Result:
+    """The run in ``out`` that wrote no summary (see :func:`load`)."""
+    try:
+        data = json.loads((out / RUN_FILE).read_text())
+        case = Case.from_dict(data["case"])
+        args = data["run"]
+        curve = io.read_curve(out / "curve.csv")
+        checkpoint = out / CHECKPOINT_FILE
+        saved = checkpoint.read_bytes() if checkpoint.exists() else None
+        sim = case.simulation(args["until_density"], args["until_time_s"], args["snapshot_times_s"], resume_from=saved)
+    except (ValueError, TypeError, KeyError) as e:
+        raise ValueError(f"{out}: not the outputs of a run ({type(e).__name__}: {e})") from e
+    steps = len(curve["time_s"]) - 1
+    at = f"its last checkpoint (step {len(sim.curve()['time_s']) - 1})" if saved is not None else "its start (no checkpoint)"
+    return Result(
+        case=case,
+        curve=curve,
+        status="interrupted",
+        wall_seconds=float(sim.stats().get("wall_seconds", 0.0)),
+        stats=sim.stats(),
+        degrees_of_freedom=sim.degrees_of_freedom,
+        nodes=sim.node_count,
+        elements=sim.element_count,
+        message=f"no summary.json: the run is still going or was killed; its curve to step {steps}, its totals as of {at}",
+    )
 
 
 def _complete_curve(writer: io.CurveWriter, curve: dict[str, Any], error: BaseException | None) -> BaseException | None:

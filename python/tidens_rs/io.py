@@ -170,8 +170,11 @@ def _format(value: float, count: bool) -> str:
 
 
 def read_curve(path: Path) -> dict[str, np.ndarray]:
-    """Reads a curve CSV back into numpy arrays keyed by column."""
-    data = np.genfromtxt(path, delimiter=",", names=True)
+    """Reads a curve CSV back into numpy arrays keyed by column: its
+    complete rows (a run still writing it may have begun the next)."""
+    text = path.read_text()
+    lines = text.split("\n")[:-1] if "\n" in text else [text]
+    data = np.genfromtxt(lines, delimiter=",", names=True)
     return {name: np.atleast_1d(data[name]) for name in data.dtype.names or ()}
 
 
