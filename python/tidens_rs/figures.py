@@ -341,6 +341,10 @@ def make(
     )
     for row in table:
         folder = Path(row["folder"])
+        if not (folder / "summary.json").exists():
+            # A worker that died wrote no summary: its curve is drawn nowhere.
+            say(f"  {row['name']}: no result ({folder} holds no summary.json)")
+            continue
         try:
             runs.results[row["name"]] = load(folder)
         except (FileNotFoundError, ValueError) as e:
