@@ -710,12 +710,12 @@ def resume(
         until_density, until_time_s = args["until_density"], args["until_time_s"]
     except (ValueError, TypeError, KeyError) as e:
         raise ValueError(f"{run_file}: not the record of a run ({type(e).__name__}: {e})") from e
-    recorded = case
+    interval_changed = checkpoint_every is not None and checkpoint_every != case.solver.checkpoint_every
     if checkpoint_every is not None:
         case = replace(case, solver=replace(case.solver, checkpoint_every=checkpoint_every))
     earlier = [(t, name) for t, name in io.read_pvd(out / "fields.pvd") if name != "fields_final.vtu"]
     sim = case.simulation(until_density, until_time_s, args["snapshot_times_s"], resume_from=checkpoint.read_bytes())
-    if case != recorded:
+    if interval_changed:
         io.write_json(run_file, {**data, "case": case.as_dict()})
     result, error = case._press(
         until_density,
