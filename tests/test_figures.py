@@ -142,6 +142,10 @@ def test_the_random_packings_figure_plans_its_packings_first_and_draws_their_con
         assert runs.jobs[name].case.solver.checkpoint_every == figures.RANDOM_CHECKPOINT_EVERY
     radii = {p[1] for p in runs.jobs[bimodal].case.cell.particles}
     assert max(radii) / min(radii) == pytest.approx(figures.RANDOM_BIMODAL[0], rel=1e-12)
+    # The log names the level the runs use, not the one asked for.
+    assert figures.levels_said(list(runs.jobs.values()), 2) == f"mesh level {figures.RANDOM_LEVEL}"
+    both = figures.plan(level=2, figures=["random_packings", "aspect_ratio"])
+    assert figures.levels_said(list(both.jobs.values()), 2) == f"mesh levels {figures.RANDOM_LEVEL}, 2"
     # The packings, hours long, start first.
     order = [j.name for j in sorted(runs.jobs.values(), key=figures._cost, reverse=True)]
     assert set(order[:2]) == {mono, bimodal}

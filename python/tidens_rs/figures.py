@@ -256,6 +256,14 @@ def random_job_name(bimodal: tuple[float, float] | None) -> str:
     return f"random{RANDOM_PARTICLES}-s{RANDOM_SEED}{sizes}-{CREEP}-{STUDY_STRESS_MPA:g}MPa-L{RANDOM_LEVEL}"
 
 
+def levels_said(jobs: Sequence[Job], level: int) -> str:
+    """The mesh levels ``jobs`` run at, for the log: "mesh level 1", or
+    "mesh levels 1, 2" (the random packings run at ``RANDOM_LEVEL``
+    whatever the figures' ``level``, which is said when there are no jobs)."""
+    levels = sorted({j.case.solver.mesh_level for j in jobs}) or [level]
+    return f"mesh level{'s' if len(levels) > 1 else ''} {', '.join(map(str, levels))}"
+
+
 def plan(level: int = 2, figures: Sequence[str] = DEFAULT_FIGURES) -> Runs:
     """The runs that ``figures`` need at mesh ``level``."""
     runs = Runs(level)
@@ -328,7 +336,7 @@ def make(
     out = Path(out_dir)
     runs = plan(level, figures)
     jobs = sorted(runs.jobs.values(), key=_cost, reverse=True)
-    say(f"{len(jobs)} runs at mesh level {level} into {out / RUNS}")
+    say(f"{len(jobs)} runs at {levels_said(jobs, level)} into {out / RUNS}")
     table = sweep.execute(
         [j.point() for j in jobs],
         out / RUNS,
@@ -370,7 +378,7 @@ def make(
     made.findings = findings
     made.wall_seconds = time.perf_counter() - start
     head = (
-        f"# Figures of tidens {_version()}\n\nMade by `tidens figures` at mesh level {level} in "
+        f"# Figures of tidens {_version()}\n\nMade by `tidens figures` at {levels_said(jobs, level)} in "
         f"{made.wall_seconds:.0f} s ({len(jobs)} runs; each run's folder is under `{RUNS}/`, its table "
         f"`{RUNS}/sweep.csv`). Every FE curve carries its estimated error as a band. The paper's "
         "experimental curves are not available: the figures show finite elements and the continuum "
