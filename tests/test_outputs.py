@@ -4,6 +4,7 @@ and the curve file agreeing with the summary after any stop."""
 import csv
 import errno
 import json
+import re
 from pathlib import Path
 from typing import Any
 
@@ -14,6 +15,7 @@ import pytest
 import tidens_rs as td
 from tidens_rs import io
 from tidens_rs.cli import main
+from tidens_rs.result import MARK_DENSITIES
 
 
 def rows(path: Path) -> list[dict[str, str]]:
@@ -201,7 +203,7 @@ def test_a_run_resumed_with_another_checkpoint_interval_records_and_keeps_it(tmp
     assert len(sim.curve()["time_s"]) - 1 == steps - steps % 4
 
 
-def test_a_run_without_a_summary_loads_as_far_as_it_got(tmp_path: Path) -> None:
+def test_a_run_without_a_summary_loads_as_far_as_it_got(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "run"
     stopped_at(bcc_every_10(), 15, out)
     stopped = td.load(out)
@@ -219,6 +221,20 @@ def test_a_run_without_a_summary_loads_as_far_as_it_got(tmp_path: Path) -> None:
     # Its totals are the last checkpoint's: step 10.
     assert partial.stats["steps"] == 10 and 0 < partial.stats["newton_iterations"] < stopped.stats["newton_iterations"]
     assert "step 15" in (partial.message or "") and "step 10" in (partial.message or "")
+    # `tidens show` reports it so: the marks its curve has passed, with
+    # their times; with --plot, its curve so far.
+    capsys.readouterr()
+    assert main(["show", str(out), "--plot", str(tmp_path / "so_far.png")]) == 0
+    text = capsys.readouterr().out
+    assert (partial.message or "") in text
+    assert f"status: interrupted   final density {partial.rel_density[-1]:.4f}" in text
+    printed = {float(line.split()[0]): line.split()[1] for line in text.splitlines() if re.match(r"^ 0\.\d\d ", line)}
+    passed = [m for m in MARK_DENSITIES if partial.rho0 < m <= partial.rel_density[-1]]
+    assert passed and sorted(printed) == passed
+    for m in passed:
+        assert printed[m] == f"{partial.time_to_density(m):.4g}"
+    assert (tmp_path / "so_far.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert main(["show", str(tmp_path / "nothing")]) == 1 and "no run to load" in capsys.readouterr().err
 
 
 def test_resume_refuses_a_folder_without_a_run_and_case_options(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

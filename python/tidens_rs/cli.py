@@ -23,7 +23,7 @@ from typing import NoReturn
 
 from . import cells, continuum, materials, sweep
 from ._core import CONTACT_FACETS, CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, Packing, TidensError, UnsupportedError, __version__
-from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, FINISHED, Case, SolverSettings, resume
+from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, FINISHED, Case, SolverSettings, load, resume
 from .io import check_output_dir
 from .result import MARK_DENSITIES, Result
 
@@ -244,8 +244,8 @@ def _report(result: Result) -> None:
     for r in MARK_DENSITIES:
         k = f"{r:g}"
         fe = s["times_to_density_s"].get(k)
-        if fe is None and r > s["final_density"]:
-            continue  # beyond the run
+        if fe is None and not result.rho0 < r <= s["final_density"]:
+            continue  # not on the run's curve
         cm = s["continuum_times_to_density_s"].get(k)
         print(f"{r:5.2f} {_fmt(fe):>12} {_pct(est['relative'].get(k)):>10} {_fmt(cm):>16}")
     print(f"error estimate: {est['method']['mesh']}")
@@ -552,6 +552,27 @@ def _pack(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_show_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("folder", type=Path, metavar="DIR",
+                   help="a run's folder (tidens run --out, or one point of a sweep or of tidens figures), finished or still going")
+    p.add_argument("--plot", type=Path, metavar="FILE", default=None,
+                   help="also draw its density curve so far beside the continuum model into FILE (PNG, PDF or SVG by its suffix)")
+
+
+def _show(args: argparse.Namespace) -> int:
+    """Reports a run from its folder as `tidens run` does at its end: a
+    run still going (or killed) to its last complete row of the curve,
+    its totals as of its last checkpoint."""
+    result = load(args.folder)
+    if result.message:
+        print(result.message)
+    _report(result)
+    if args.plot is not None:
+        result.plot(args.plot)
+        print(f"wrote {args.plot}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="tidens", description="Powder-level FE of hot pressing of titanium powders (units: mm, N, MPa, s).")
     parser.add_argument("--version", action="version", version=f"tidens {__version__}")
@@ -569,6 +590,8 @@ def build_parser() -> argparse.ArgumentParser:
     _add_figures_options(figures_parser)
     pack = sub.add_parser("pack", help="a random dense packing of spheres or spheroids, written to a file with its rho0 and coordination number")
     _add_pack_options(pack)
+    show = sub.add_parser("show", help="a run's densities, times and costs from its folder, finished or still going (with --plot, its curve)")
+    _add_show_options(show)
     return parser
 
 
@@ -594,6 +617,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _figures(args)
         if args.command == "pack":
             return _pack(args)
+        if args.command == "show":
+            return _show(args)
         return _run(args)
     except (ValueError, TypeError, FileExistsError, UnsupportedError) as e:
         parser.error(str(e))
@@ -604,7 +629,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"tidens: {e}", file=sys.stderr)
         return 3
     except KeyboardInterrupt:
-        print(f"tidens: interrupted; partial results in {args.out}", file=sys.stderr)
+        out = getattr(args, "out", None)
+        print("tidens: interrupted" + ("" if out is None else f"; partial results in {out}"), file=sys.stderr)
         return 130
 
 
