@@ -228,6 +228,7 @@ def test_a_run_without_a_summary_loads_as_far_as_it_got(tmp_path: Path, capsys: 
     text = capsys.readouterr().out
     assert (partial.message or "") in text
     assert f"status: interrupted   final density {partial.rel_density[-1]:.4f}" in text
+    assert f"wall {partial.wall_seconds:.1f} s to step 10, 15 steps, " in text
     printed = {float(line.split()[0]): line.split()[1] for line in text.splitlines() if re.match(r"^ 0\.\d\d ", line)}
     passed = [m for m in MARK_DENSITIES if partial.rho0 < m <= partial.rel_density[-1]]
     assert passed and sorted(printed) == passed

@@ -257,8 +257,11 @@ def _report(result: Result) -> None:
         verdict = "reached" if search["reached"] else "NOT reached (the last rung was not accurate enough)"
         print(f"accuracy {_pct(search['target'])} {verdict}: {rungs}; {search['wall_seconds']:.1f} s in all")
     companion = est["companion_wall_seconds"]
+    # A run loaded without its summary has its totals from its last checkpoint.
+    counted = int(result.stats.get("steps", s["steps"]))
+    upto = f" to step {counted}" if counted < s["steps"] else ""
     print(
-        f"wall {s['wall_seconds']:.1f} s" + ("" if companion is None else f" (+ {companion:.1f} s for the companion)") + f", {s['steps']} steps, {s['newton_iterations']} Newton iterations, "
+        f"wall {s['wall_seconds']:.1f} s{upto}" + ("" if companion is None else f" (+ {companion:.1f} s for the companion)") + f", {s['steps']} steps, {s['newton_iterations']} Newton iterations, "
         f"{s['degrees_of_freedom']} dofs (mesh level {s['mesh_level']}, tolerance {s['tolerance']:g})"
     )
 
