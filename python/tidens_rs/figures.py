@@ -1001,7 +1001,7 @@ def _mesh_study(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str, 
 
 
 def _random_packings(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str, Any]]]:
-    fig, axes = _figure(1, 2, width=5.0)
+    fig, axes = _figure(1, 2, width=5.0, height=3.8)
     ax, zax = axes[0][0], axes[0][1]
     rows = []
     for k, bimodal in enumerate((None, RANDOM_BIMODAL)):
@@ -1025,10 +1025,11 @@ def _random_packings(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[
     if not rows:
         _missing(zax, "random packings")
     _density_axes(ax, f"Ti-6Al-4V creep, {STUDY_STRESS_MPA:g} MPa, mesh level {RANDOM_LEVEL}")
-    ax.legend(fontsize=7, loc="upper left")
+    # Below the panels: inside, it would hide the lattices' early curves.
+    fig.legend(*ax.get_legend_handles_labels(), fontsize=7, loc="outside lower center", ncol=4)
     zax.set_xlabel("relative density")
-    zax.set_ylabel("coordination number (contacts per particle)")
-    zax.set_title("random packings: contacts pressed", fontsize=10)
+    zax.set_ylabel("coordination number")
+    zax.set_title("random packings: contacts pressed per particle", fontsize=10)
     zax.grid(True, alpha=0.3)
     if rows:
         zax.legend(fontsize=8, loc="upper left")
