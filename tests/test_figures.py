@@ -164,6 +164,44 @@ def test_the_random_packings_figure_plans_its_packings_first_and_draws_their_con
     assert cells[10] == f"{s['continuum_times_to_density_s']['0.8']:.1f} s"
 
 
+def test_drawing_only_draws_the_runs_as_their_folders_hold_them(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from tidens_rs.cli import main
+
+    runs = figures.plan(level=1, figures=["random_packings"])
+    mono = figures.random_job_name(None)
+    sc = figures.job_name("sc", figures.CREEP, 10.0, level=figures.RANDOM_LEVEL)
+    folder = tmp_path / figures.RUNS
+    # Nothing run yet: every run missing, none started, the figure drawn.
+    empty = figures.make(tmp_path, level=1, figures=["random_packings"], draw_only=True)
+    assert {r["status"] for r in empty.runs} == {"missing"} and not folder.exists()
+    assert (tmp_path / "random_packings.png").exists()
+    # The sc lattice finished; the one-size packing's folder holding a run
+    # killed at step 12 (the periodic sc lattice standing in for it: a
+    # summary deleted, as a killed run leaves none).
+    runs.jobs[sc].case.run(figures.UNTIL_DENSITY, out_dir=folder / sc, error_estimate=False)
+    stand_in = td.Case(cell=td.cells.as_periodic(td.cells.sc()), material=BASE, stress_mpa=10.0,
+                       solver=td.SolverSettings(mesh_level=1))
+
+    def stop(point: dict[str, float]) -> bool:
+        return point["step"] < 12
+
+    stand_in.run(0.6, out_dir=folder / mono, callback=stop, error_estimate=False)
+    (folder / mono / "summary.json").unlink()
+    partial = td.load(folder / mono)
+    capsys.readouterr()
+    assert main(["figures", "--out", str(tmp_path), "--only", "random_packings", "--draw-only", "--quiet"]) == 0
+    assert "not finished: " + mono in capsys.readouterr().out
+    captions = (tmp_path / figures.CAPTIONS).read_text()
+    assert "Drawn by `tidens figures --draw-only`" in captions and f"`{mono}` (interrupted)" in captions
+    assert f"`{sc}`" not in captions.split("\n\n")[1]  # finished: not named as unfinished
+    row = next(line for line in captions.splitlines() if line.startswith("| random, one size"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    assert cells[5:7] == ["interrupted", f"{partial.rel_density[-1]:.4f}"] and len(partial.time_s) == 13
+    # Nothing was run: the folders are as they were.
+    assert sorted(p.name for p in folder.iterdir()) == sorted([mono, sc])
+    assert not (folder / mono / "summary.json").exists()
+
+
 def test_a_run_that_failed_is_reported_with_its_reason() -> None:
     row: dict[str, Any] = {"name": "random32", "status": "failed", "wall_seconds": None,
            "reason": "worker exited with status 1: ValueError: checkpoint: taken with other solver settings"}

@@ -486,16 +486,21 @@ def _add_figures_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--only", type=_name_list(figures.FIGURES), default=list(figures.DEFAULT_FIGURES), help=f"comma-separated figures among {', '.join(figures.FIGURES)} (default all but random_packings, whose runs take hours)")
     p.add_argument("--workers", type=int, help="worker processes, one run and one thread each (default: the cores)")
     p.add_argument("--quiet", action="store_true", help="no progress")
+    p.add_argument("--draw-only", action="store_true",
+                   help="run nothing: draw from the run folders in --out as they are (runs still going or stopped drawn to where they got, captions.md names them)")
 
 
 def _figures(args: argparse.Namespace) -> int:
     from . import figures
 
     say = (lambda _m: None) if args.quiet else (lambda m: print(m, flush=True))
-    made = figures.make(args.out, level=args.level, figures=args.only, workers=args.workers, log=say)
+    made = figures.make(args.out, level=args.level, figures=args.only, workers=args.workers, log=say, draw_only=args.draw_only)
     failed = [r["name"] for r in made.runs if r["status"] not in FINISHED]
     for f in made.findings:
         print(f"  {f['verdict']:>13}: {f['claim']}")
+    if args.draw_only:
+        print(f"drew {len(made.files)} files into {args.out}" + (f"; not finished: {', '.join(failed)}" if failed else ""))
+        return 0
     print(f"wrote {len(made.files)} files to {args.out} in {made.wall_seconds:.0f} s" + (f"; runs that did not finish: {', '.join(failed)}" if failed else ""))
     return 3 if failed else 0
 

@@ -59,7 +59,7 @@ from . import cells as cells_module
 from . import io
 from . import materials as presets
 from . import sweep
-from .case import Case, SolverSettings, accuracy_ladder_tolerance, load
+from .case import FINISHED, Case, SolverSettings, accuracy_ladder_tolerance, load
 from .continuum import ContinuumModel
 from .result import MARK_DENSITIES, Result, interpolate_time
 from .similarity import MappedCurve, map_curve
@@ -313,30 +313,10 @@ def _cost(job: Job) -> float:
     return cell * 4.0 ** c.solver.mesh_level * (1.0 if c.material.creep_n > 1.0 else 0.6)
 
 
-def make(
-    out_dir: str | Path,
-    *,
-    level: int = 2,
-    figures: Sequence[str] = DEFAULT_FIGURES,
-    workers: int | None = None,
-    progress: bool = False,
-    log: Callable[[str], None] | None = None,
-) -> Made:
-    """Runs what ``figures`` need at mesh ``level`` into ``out_dir/runs``
-    (skipping runs finished there earlier), then draws the figures into
-    ``out_dir`` (PNG and PDF), ``captions.md`` and ``findings.md``.
-    ``workers``: worker processes (default: the machine's cores)."""
-    start = time.perf_counter()
-    say = log or (lambda _m: None)
-    for fig in figures:
-        if fig not in FIGURES:
-            raise ValueError(f"figures: {fig!r} is not one of {', '.join(FIGURES)}")
-    if isinstance(level, bool) or not isinstance(level, int) or not 1 <= level:
-        raise ValueError(f"level = {level!r}: must be a whole number >= 1")
-    out = Path(out_dir)
-    runs = plan(level, figures)
-    jobs = sorted(runs.jobs.values(), key=_cost, reverse=True)
-    say(f"{len(jobs)} runs at {levels_said(jobs, level)} into {out / RUNS}")
+def _run_jobs(runs: Runs, jobs: Sequence[Job], out: Path, *, workers: int | None, progress: bool,
+              say: Callable[[str], None]) -> list[dict[str, Any]]:
+    """Runs ``jobs`` into ``out/runs`` (those finished there earlier are
+    skipped) and loads their results into ``runs``; the sweep's table."""
     table = sweep.execute(
         [j.point() for j in jobs],
         out / RUNS,
@@ -357,6 +337,66 @@ def make(
             runs.results[row["name"]] = load(folder)
         except (FileNotFoundError, ValueError) as e:
             say(f"  {row['name']}: no result ({e})")
+    return table
+
+
+def _as_found(runs: Runs, name: str, folder: Path, say: Callable[[str], None]) -> dict[str, Any]:
+    """The run ``name`` as its folder holds it (finished, going or
+    stopped), loaded into ``runs``; its row: name, folder, status (``missing``
+    where nothing was run), final density, run time."""
+    row: dict[str, Any] = {"name": name, "folder": str(folder), "status": "missing", "final_density": None,
+                           "wall_seconds": None, "reason": None}
+    if not (folder / "run.json").exists():
+        return row
+    try:
+        r = load(folder)
+    except (FileNotFoundError, ValueError) as e:
+        row["reason"] = str(e)
+        say(f"  {name}: no result ({e})")
+        return row
+    runs.results[name] = r
+    row.update(status=r.status, final_density=float(r.rel_density[-1]), wall_seconds=r.run_seconds)
+    say(f"  {name}: {r.status}, rho = {r.rel_density[-1]:.4f} at t = {r.time_s[-1]:.4g} s")
+    return row
+
+
+def make(
+    out_dir: str | Path,
+    *,
+    level: int = 2,
+    figures: Sequence[str] = DEFAULT_FIGURES,
+    workers: int | None = None,
+    progress: bool = False,
+    log: Callable[[str], None] | None = None,
+    draw_only: bool = False,
+) -> Made:
+    """Runs what ``figures`` need at mesh ``level`` into ``out_dir/runs``
+    (skipping runs finished there earlier), then draws the figures into
+    ``out_dir`` (PNG and PDF), ``captions.md`` and ``findings.md``.
+    ``workers``: worker processes (default: the machine's cores).
+
+    ``draw_only`` runs nothing: it draws from the run folders as they are
+    (while the runs go on in another process, say). A run still going or
+    stopped (no summary) is drawn to where its curve got, and
+    ``captions.md`` names it; a run never started is missing from its
+    figure. Its rows in ``Made.runs`` give each run's status (``missing``
+    for one never started)."""
+    start = time.perf_counter()
+    say = log or (lambda _m: None)
+    for fig in figures:
+        if fig not in FIGURES:
+            raise ValueError(f"figures: {fig!r} is not one of {', '.join(FIGURES)}")
+    if isinstance(level, bool) or not isinstance(level, int) or not 1 <= level:
+        raise ValueError(f"level = {level!r}: must be a whole number >= 1")
+    out = Path(out_dir)
+    runs = plan(level, figures)
+    jobs = sorted(runs.jobs.values(), key=_cost, reverse=True)
+    if draw_only:
+        say(f"drawing from the folders of {len(jobs)} runs at {levels_said(jobs, level)} in {out / RUNS}, running none")
+        table = [_as_found(runs, job.name, out / RUNS / job.name, say) for job in jobs]
+    else:
+        say(f"{len(jobs)} runs at {levels_said(jobs, level)} into {out / RUNS}")
+        table = _run_jobs(runs, jobs, out, workers=workers, progress=progress, say=say)
     made = Made(files=[], runs=table, wall_seconds=0.0)
     captions: list[str] = []
     findings: list[dict[str, Any]] = []
@@ -377,11 +417,21 @@ def make(
         say(f"  {fig}: {', '.join(p.name for p in files)}")
     made.findings = findings
     made.wall_seconds = time.perf_counter() - start
+    if draw_only:
+        unfinished = [f"`{r['name']}` ({r['status']})" for r in table if r["status"] not in FINISHED]
+        made_by = (
+            f"Drawn by `tidens figures --draw-only` from the folders of {len(jobs)} runs at {levels_said(jobs, level)} "
+            f"under `{RUNS}/`, as they were, running none"
+            + (f"; not finished, drawn to where they got or missing: {', '.join(unfinished)}" if unfinished else "")
+        )
+    else:
+        made_by = (
+            f"Made by `tidens figures` at {levels_said(jobs, level)} in {made.wall_seconds:.0f} s ({len(jobs)} runs; "
+            f"each run's folder is under `{RUNS}/`, its table `{RUNS}/sweep.csv`)"
+        )
     head = (
-        f"# Figures of tidens {_version()}\n\nMade by `tidens figures` at {levels_said(jobs, level)} in "
-        f"{made.wall_seconds:.0f} s ({len(jobs)} runs; each run's folder is under `{RUNS}/`, its table "
-        f"`{RUNS}/sweep.csv`). Every FE curve carries its estimated error as a band. The paper's "
-        "experimental curves are not available: the figures show finite elements and the continuum "
+        f"# Figures of tidens {_version()}\n\n{made_by}. Every FE curve carries its estimated error as a band. "
+        "The paper's experimental curves are not available: the figures show finite elements and the continuum "
         "model of the paper (Eqs. 2 and 3).\n"
     )
     made.files.append(io.atomic_write(out / CAPTIONS, lambda tmp: tmp.write_text(head + "\n" + "\n".join(captions))))
@@ -1010,7 +1060,8 @@ def _random_packings(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[
             continue
         label = "random, one size" if bimodal is None else f"random, radii {bimodal[0]:g}:1"
         color = f"C{k}"
-        _plot(ax, computed(r), color, f"{label}, rho0 {r.rho0:.3f}")
+        so_far = "" if r.status in FINISHED else f" ({r.status}, to rho {r.rel_density[-1]:.3f})"
+        _plot(ax, computed(r), color, f"{label}, rho0 {r.rho0:.3f}{so_far}")
         t_model, rho_model = continuum_curve(r)
         ax.plot(t_model, rho_model, ":", color=color, lw=1.0, label=f"continuum model from rho0 {r.case.cell.rho0:.3f}")
         z = r.curve.get("coordination_number")
