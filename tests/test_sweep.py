@@ -4,6 +4,8 @@ finished points and resumes an interrupted one."""
 
 import json
 import math
+import os
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -50,6 +52,19 @@ def test_every_point_runs_once_in_parallel_into_its_folder_and_the_table(tmp_pat
     n = td.materials.TI64_CREEP_1293K.creep_n
     t5, t10 = (next(r["t_0.7_s"] - n / (n + 1) for r in rows if r["cell"] == "sc" and r["stress_mpa"] == s) for s in (5.0, 10.0))
     assert t5 / t10 == pytest.approx(2**n, rel=0.01)
+    # The cores are shared among the workers that run at once: four points
+    # on two workers, and then, the sweep called again for its one point
+    # left, all the cores for that one, to the same curve.
+    cores = os.cpu_count() or 1
+    threads = {r["name"]: json.loads((tmp_path / r["name"] / "summary.json").read_text())["stats"]["solver_threads"] for r in rows}
+    assert set(threads.values()) == {max(1, cores // 2)}
+    last = tmp_path / names[-1]
+    curve = (last / "curve.csv").read_text()
+    shutil.rmtree(last)
+    again = sweep.run(base(), tmp_path, until_density=UNTIL, stresses_mpa=[5.0, 10.0], cells=["sc", "bcc"], workers=2, error_estimate=False)
+    assert json.loads((last / "summary.json").read_text())["stats"]["solver_threads"] == cores
+    assert (last / "curve.csv").read_text() == curve and times(again) == times(rows)
+    assert [sweep.worker_threads(8, 4, k) for k in (0, 1, 2, 3, 4, 9)] == [8, 8, 4, 2, 2, 2]
 
 
 def test_a_point_under_way_is_reported_with_its_last_converged_step(tmp_path: Path) -> None:

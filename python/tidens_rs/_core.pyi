@@ -18,6 +18,7 @@ __all__ = [
     "TidensError",
     "UnsupportedError",
     "tmp_creep_coefficient",
+    "solver_threads",
     "check_parameters",
     "__version__",
     "PRESET_NAMES",
@@ -61,6 +62,12 @@ class ConvergenceError(TidensError):
 
 class UnsupportedError(TidensError):
     """A scene this version cannot simulate."""
+
+def solver_threads() -> int:
+    """Threads the solver's parallel parts (assembly, large Cholesky
+    factorisations) run on in this process: ``RAYON_NUM_THREADS`` if set
+    when the first solve started, else the machine's cores. The results do
+    not depend on it; the wall time does."""
 
 def tmp_creep_coefficient(dv_over_v: float, cycle_s: float, sigma0_mpa: float, n: float) -> float:
     """Norton coefficient C [MPa^-1 s^-1] of transformation mismatch plasticity."""

@@ -597,7 +597,8 @@ class Case:
             curve=curve,
             status=status,
             wall_seconds=time.perf_counter() - start,
-            stats=sim.stats(),
+            # The wall time's threads (this call's, when resumed).
+            stats={**sim.stats(), "solver_threads": float(_core.solver_threads())},
             degrees_of_freedom=sim.degrees_of_freedom,
             nodes=sim.node_count,
             elements=sim.element_count,

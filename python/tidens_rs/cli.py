@@ -439,7 +439,7 @@ def _add_sweep_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--no-error-estimate", dest="error_estimate", action="store_false", help="skip each run's coarse companion")
     g = p.add_argument_group("where and how")
     g.add_argument("--out", type=_folder, required=True, help="the sweep's folder: one folder per point and the table sweep.csv / sweep.parquet; a restarted sweep skips finished points and resumes interrupted ones")
-    g.add_argument("--workers", type=int, help="worker processes on this machine, one point and one thread each (default: the cores)")
+    g.add_argument("--workers", type=int, help="worker processes on this machine, one point each, the cores shared among those running (default: the cores)")
     g.add_argument("--scheduler", metavar="ADDRESS", help="run the points on this Dask scheduler instead (tcp://host:port; its workers need tidens and see --out at the same path)")
     g.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -484,7 +484,7 @@ def _add_figures_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", type=_folder, required=True, help="folder of the figures (PNG, PDF, captions.md, findings.md) and of their runs (runs/); a second call into it runs only what is missing")
     p.add_argument("--level", type=int, default=2, help="mesh level of the runs, each at its accuracy-ladder tolerance 0.02 * 2^(3 - level) (default 2; the mesh study adds levels 1 to 3)")
     p.add_argument("--only", type=_name_list(figures.FIGURES), default=list(figures.DEFAULT_FIGURES), help=f"comma-separated figures among {', '.join(figures.FIGURES)} (default all but random_packings, whose runs take hours)")
-    p.add_argument("--workers", type=int, help="worker processes, one run and one thread each (default: the cores)")
+    p.add_argument("--workers", type=int, help="worker processes, one run each, the cores shared among those running (default: the cores)")
     p.add_argument("--quiet", action="store_true", help="no progress")
     p.add_argument("--draw-only", action="store_true",
                    help="run nothing: draw from the run folders in --out as they are (runs still going or stopped drawn to where they got, captions.md names them)")

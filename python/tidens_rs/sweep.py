@@ -17,7 +17,9 @@ failed (the solver's reason is in the table; delete its folder to try it
 again), and goes on with an interrupted one (stopped by Ctrl-C or killed)
 from its last checkpoint (``tidens_rs.resume``).
 
-Points run in parallel worker processes (``workers``, one thread each), or
+Points run in parallel worker processes (``workers``; the cores shared
+among those that run at once, so one thread each unless fewer points are
+left to run than workers, see :func:`worker_threads`), or
 on a Dask cluster (``scheduler``, the address of a ``dask.distributed``
 scheduler; every worker must have tidens installed and see ``out`` at the
 same path).
@@ -263,13 +265,15 @@ def execute(
         if scheduler is not None:
             _run_on_dask(scheduler, args, done)
         else:
-            n = min(workers or os.cpu_count() or 1, len(points))
+            cores = os.cpu_count() or 1
+            n = min(workers or cores, len(points))
             if n == 1:
                 for a in args:
                     done(run_point(*a))
             else:
+                threads = worker_threads(cores, n, sum(not _done_earlier(out / p.name) for p in points))
                 with ThreadPoolExecutor(max_workers=n) as pool:
-                    futures = [pool.submit(_run_in_process, *a) for a in args]
+                    futures = [pool.submit(_run_in_process, *a, threads) for a in args]
                     for f in as_completed(futures):
                         done(f.result())
     finally:
@@ -279,6 +283,23 @@ def execute(
         if bar is not None:
             bar.close()
     return [rows[p.name] for p in points]
+
+
+def worker_threads(cores: int, workers: int, to_run: int) -> int:
+    """Solver threads of each of ``workers`` worker processes with
+    ``to_run`` points left to run (the others finished in an earlier call)
+    on ``cores`` cores: the cores shared among the workers that will run at
+    once, at least one each. Fewer points than workers (a sweep resumed for
+    its last long runs) get the idle cores; the results do not depend on
+    the thread count."""
+    return max(1, cores // max(1, min(workers, to_run)))
+
+
+def _done_earlier(folder: Path) -> bool:
+    """Whether ``folder`` holds a run that :func:`run_point` will not run
+    again: finished, or failed (its summary says so)."""
+    status = (_read_summary(folder) or {}).get("status")
+    return status in FINISHED or status == "failed"
 
 
 def _written_since(path: Path, since: float) -> bool:
@@ -331,7 +352,7 @@ def run_point(
     status = None if summary is None else summary.get("status")
     started = (folder / "run.json").exists() and (folder / "checkpoint.bin").exists()
     try:
-        if status in FINISHED or status == "failed":
+        if _done_earlier(folder):
             reason = (summary or {}).get("message") or ""  # done earlier
         elif started and status in (None, "interrupted"):
             resume(folder, checkpoint_every=Case.from_dict(point.case).solver.checkpoint_every)
@@ -463,11 +484,12 @@ def _run_in_process(
     until_density: float | None,
     until_time_s: float | None,
     error_estimate: bool,
+    threads: int = 1,
 ) -> dict[str, Any]:
     """:func:`run_point` in a worker process of its own (``python -m
-    tidens_rs.sweep``, one solver thread: the workers share the machine's
-    cores), so that the caller's script needs no ``__main__`` guard and a
-    worker that dies takes no other point with it."""
+    tidens_rs.sweep``, with ``threads`` solver threads: the workers share
+    the machine's cores), so that the caller's script needs no ``__main__``
+    guard and a worker that dies takes no other point with it."""
     job = {
         "out_dir": out_dir,
         "point": asdict(point),
@@ -475,7 +497,7 @@ def _run_in_process(
         "until_time_s": until_time_s,
         "error_estimate": error_estimate,
     }
-    env = dict(os.environ, RAYON_NUM_THREADS="1")
+    env = dict(os.environ, RAYON_NUM_THREADS=str(threads))
     done = subprocess.run(
         [sys.executable, "-m", "tidens_rs.sweep"],
         input=json.dumps(io._json_safe(job)),

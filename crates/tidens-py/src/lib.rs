@@ -20,6 +20,15 @@ pub use material::{PyMaterial, tmp_creep_coefficient};
 pub use packing::PyPacking;
 pub use simulation::{PySimulation, check_parameters};
 
+/// Threads the solver's parallel parts (assembly, large Cholesky
+/// factorisations) run on in this process: ``RAYON_NUM_THREADS`` if set
+/// when the first solve started, else the machine's cores. The results do
+/// not depend on it; the wall time does.
+#[pyo3::pyfunction]
+pub fn solver_threads() -> usize {
+    tidens_solver::solver_threads()
+}
+
 /// Native core of tidens (Rust, PyO3). Units: mm, N, MPa, s.
 ///
 /// Private module: use the public API of tidens_rs.
@@ -31,7 +40,7 @@ mod _core {
     #[pymodule_export]
     use super::{
         ConvergenceError, PyCell, PyMaterial, PyPacking, PySimulation, TidensError,
-        UnsupportedError, check_parameters, tmp_creep_coefficient,
+        UnsupportedError, check_parameters, solver_threads, tmp_creep_coefficient,
     };
 
     #[pymodule_init]

@@ -46,3 +46,11 @@ pub use simulation::Simulation;
 pub use tidens_contact::ContactMode;
 pub use tidens_fem::ElementKind;
 pub use tidens_material::{Material, Preset};
+
+/// Threads the solver's parallel parts (assembly, large Cholesky
+/// factorisations) run on: the current rayon pool's, by default the global
+/// one (`RAYON_NUM_THREADS`, else the machine's cores). The results do not
+/// depend on it; the wall time does.
+pub fn solver_threads() -> usize {
+    rayon::current_num_threads()
+}
