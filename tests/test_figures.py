@@ -4,6 +4,7 @@ folders, and one figure made end to end on a coarse mesh."""
 
 import json
 import math
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -171,10 +172,13 @@ def test_drawing_only_draws_the_runs_as_their_folders_hold_them(tmp_path: Path, 
     mono = figures.random_job_name(None)
     sc = figures.job_name("sc", figures.CREEP, 10.0, level=figures.RANDOM_LEVEL)
     folder = tmp_path / figures.RUNS
-    # Nothing run yet: every run missing, none started, the figure drawn.
-    empty = figures.make(tmp_path, level=1, figures=["random_packings"], draw_only=True)
+    # Nothing run yet: every run missing, none started, every figure drawn
+    # (without a warning: no empty legend).
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        empty = figures.make(tmp_path, level=1, figures=figures.FIGURES, draw_only=True)
     assert {r["status"] for r in empty.runs} == {"missing"} and not folder.exists()
-    assert (tmp_path / "random_packings.png").exists()
+    assert all((tmp_path / f"{name}.png").exists() for name in figures.FIGURES)
     # The sc lattice finished; the one-size packing's folder holding a run
     # killed at step 12 (the periodic sc lattice standing in for it: a
     # summary deleted, as a killed run leaves none).

@@ -570,6 +570,13 @@ def _plot(ax: Axes, curve: Curve, color: str, label: str, style: str = "-") -> N
         ax.fill_betweenx(rho[keep], t[keep] / (1 + e), t[keep] * (1 + e), color=color, alpha=0.18, lw=0)
 
 
+def _legend(ax: Axes, **kw: Any) -> None:
+    """The legend of ``ax``, where it has labelled curves (a figure drawn
+    from runs not there yet may have none)."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(**kw)
+
+
 def _density_axes(ax: Axes, title: str) -> None:
     ax.set_xscale("log")
     ax.set_xlabel("time [s]")
@@ -618,7 +625,7 @@ def _ti64_cells(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str, 
                 times[(cell, material, s)] = {m_: curve.time_to_density(m_) for m_ in MARK_DENSITIES}
             _density_axes(ax, f"{CELL_LABELS[cell]}, Ti-6Al-4V {MATERIAL_LABELS[material]}")
             if j == 0:
-                ax.legend(fontsize=7, loc="upper left")
+                _legend(ax, fontsize=7, loc="upper left")
     files = _save(fig, out, "ti64_cells")
     caption = (
         "## ti64_cells\n\nRelative density against time (log scale) for Ti-6Al-4V, creep at 1293 K "
@@ -773,7 +780,7 @@ def _cpti(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str, Any]]]
     _density_axes(axes[0][0], f"CP-Ti alpha, {CPTI_CELL}, f = {CPTI_ALPHA_KNOCKDOWN}")
     _density_axes(axes[0][1], f"CP-Ti beta 1253 K, {CPTI_CELL}")
     for ax in axes[0]:
-        ax.legend(fontsize=7, loc="upper left")
+        _legend(ax, fontsize=7, loc="upper left")
     files = _save(fig, out, "cpti")
     caption = (
         "## cpti\n\nCP-Ti (n = 4.3) on the bcc cell, mesh level "
@@ -802,7 +809,7 @@ def _aspect_ratio(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str
             t9[(ratio, tied)] = r.time_to_density(0.9)
             err9[(ratio, tied)] = r.estimate().relative.get("0.9")
         _density_axes(ax, "sc, Ti-6Al-4V creep, 15 MPa, " + ("particle tied to the planes" if tied else "frictionless mirror planes"))
-        ax.legend(fontsize=8, loc="upper left")
+        _legend(ax, fontsize=8, loc="upper left")
     files = _save(fig, out, "aspect_ratio")
     caption = (
         "## aspect_ratio\n\nSpheroidal particles, c/a = 0.8, 1 and 1.2 (c along the pressing direction), sc "
@@ -858,7 +865,7 @@ def _master_curve(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str
             ax.set_ylabel(ylabel)
             ax.grid(True, alpha=0.3, which="both")
             ax.axvspan(*RATE_WINDOW, color="0.9", zorder=0)
-            ax.legend(fontsize=8)
+            _legend(ax, fontsize=8)
         axes[i][0].set_title(f"{label}, Ti-6Al-4V creep (n = {n:g})", fontsize=10)
         axes[i][1].set_title(f"{label}: master curve", fontsize=10)
         if len(normalised) < 2:
@@ -1028,13 +1035,13 @@ def _mesh_study(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[str, 
                 if e is not None:
                     axes[i][1].loglog([wall], [100 * e], mk, color=f"C{k}", label=f"level {lvl}, t({m:g})")
         _density_axes(axes[i][0], f"{CELL_LABELS[cell]}, Ti-6Al-4V creep, {STUDY_STRESS_MPA:g} MPa")
-        axes[i][0].legend(fontsize=8, loc="upper left")
+        _legend(axes[i][0], fontsize=8, loc="upper left")
         ax = axes[i][1]
         ax.set_xlabel("wall time with companion [s], one thread")
         ax.set_ylabel("estimated error of t(rho) [%]")
         ax.set_title(f"{CELL_LABELS[cell]}: error against run time", fontsize=10)
         ax.grid(True, alpha=0.3, which="both")
-        ax.legend(fontsize=7)
+        _legend(ax, fontsize=7)
     files = _save(fig, out, "mesh_study")
     table = "\n".join(
         f"| {c} | {lvl} | {d} | {w:.1f} | " + " | ".join(_pct(e) for e in errs) + " |" for c, lvl, d, w, errs in rows
@@ -1083,7 +1090,7 @@ def _random_packings(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[
     zax.set_title("random packings: contacts pressed per particle", fontsize=10)
     zax.grid(True, alpha=0.3)
     if rows:
-        zax.legend(fontsize=8, loc="upper left")
+        _legend(zax, fontsize=8, loc="upper left")
     files = _save(fig, out, "random_packings")
     marks = (0.8, 0.9, 0.95)
 
