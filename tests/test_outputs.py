@@ -236,6 +236,14 @@ def test_a_run_without_a_summary_loads_as_far_as_it_got(tmp_path: Path, capsys: 
         assert printed[m] == f"{partial.time_to_density(m):.4g}"
     assert (tmp_path / "so_far.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["show", str(tmp_path / "nothing")]) == 1 and "no run to load" in capsys.readouterr().err
+    # A folder of runs: one line each, from its curve's last complete row.
+    assert main(["show", str(tmp_path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert lines[0] == f"1 runs in {tmp_path}:" and lines[1].startswith(
+        f"  run: no summary (going or stopped), step 15, t = {partial.time_s[-1]:.4g} s, rho = {partial.rel_density[-1]:.4f}, ")
+    with pytest.raises(SystemExit) as e:
+        main(["show", str(tmp_path), "--plot", str(tmp_path / "all.png")])
+    assert e.value.code == 2 and "--plot draws one run" in capsys.readouterr().err
 
 
 def test_resume_refuses_a_folder_without_a_run_and_case_options(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

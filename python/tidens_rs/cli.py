@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import re
 import sys
 import threading
@@ -562,16 +563,42 @@ def _pack(args: argparse.Namespace) -> int:
 
 def _add_show_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("folder", type=Path, metavar="DIR",
-                   help="a run's folder (tidens run --out, or one point of a sweep or of tidens figures), finished or still going")
+                   help="a run's folder (tidens run --out, or one point of a sweep or of tidens figures), finished or still going; "
+                        "or a folder of runs (a sweep's, DIR/runs of tidens figures): one line for each")
     p.add_argument("--plot", type=Path, metavar="FILE", default=None,
                    help="also draw its density curve so far beside the continuum model into FILE (PNG, PDF or SVG by its suffix)")
+
+
+def _show_folder_of_runs(folder: Path, runs: list[Path]) -> int:
+    """One line per run folder in ``folder`` (a sweep's, or the runs of
+    `tidens figures`): its status and its curve's last complete row."""
+    print(f"{len(runs)} runs in {folder}:")
+    for run in runs:
+        summary = sweep._read_summary(run)
+        status = "no summary (going or stopped)" if summary is None else str(summary.get("status"))
+        last = sweep._last_point(run / "curve.csv")
+        if last is None:
+            print(f"  {run.name}: {status}, no step yet")
+            continue
+        z = last.get("coordination_number", math.nan)
+        contacts = "" if not math.isfinite(z) else f", Z = {z:.2f}"
+        print(f"  {run.name}: {status}, step {last['step']:.0f}, t = {last['time_s']:.4g} s, rho = {last['rel_density']:.4f}"
+              f"{contacts}, time error {last['time_error_s']:.3g} s")
+    return 0
 
 
 def _show(args: argparse.Namespace) -> int:
     """Reports a run from its folder as `tidens run` does at its end: a
     run still going (or killed) to its last complete row of the curve,
-    its totals as of its last checkpoint."""
-    result = load(args.folder)
+    its totals as of its last checkpoint. A folder of runs (a sweep's)
+    gets one line per run."""
+    folder: Path = args.folder
+    runs = sorted(p for p in folder.iterdir() if (p / "run.json").exists()) if folder.is_dir() else []
+    if not (folder / "run.json").exists() and runs:
+        if args.plot is not None:
+            raise ValueError("--plot draws one run: give its folder, not a folder of runs")
+        return _show_folder_of_runs(folder, runs)
+    result = load(folder)
     if result.message:
         print(result.message)
     _report(result)
