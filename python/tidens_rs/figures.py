@@ -1067,7 +1067,7 @@ def _random_packings(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[
             continue
         label = "random, one size" if bimodal is None else f"random, radii {bimodal[0]:g}:1"
         color = f"C{k}"
-        so_far = "" if r.status in FINISHED else f" ({r.status}, to rho {r.rel_density[-1]:.3f})"
+        so_far = "" if r.status in FINISHED else f" (not finished: to rho {r.rel_density[-1]:.3f})"
         _plot(ax, computed(r), color, f"{label}, rho0 {r.rho0:.3f}{so_far}")
         t_model, rho_model = continuum_curve(r)
         ax.plot(t_model, rho_model, ":", color=color, lw=1.0, label=f"continuum model from rho0 {r.case.cell.rho0:.3f}")
