@@ -232,8 +232,12 @@ def test_a_run_without_a_summary_loads_as_far_as_it_got(tmp_path: Path, capsys: 
     printed = {float(line.split()[0]): line.split()[1] for line in text.splitlines() if re.match(r"^ 0\.\d\d ", line)}
     passed = [m for m in MARK_DENSITIES if partial.rho0 < m <= partial.rel_density[-1]]
     assert passed and sorted(printed) == passed
+    time_error = partial.summary()["error_estimate"]["time"]
     for m in passed:
         assert printed[m] == f"{partial.time_to_density(m):.4g}"
+        # No companion: the error column is the time control's part, marked.
+        line = next(x for x in text.splitlines() if x.startswith(f"{m:5.2f} "))
+        assert f" {100 * time_error[f'{m:g}']:.2f} % t " in line
     assert (tmp_path / "so_far.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert main(["show", str(tmp_path / "nothing")]) == 1 and "no run to load" in capsys.readouterr().err
     # A folder of runs: one line each, from its curve's last complete row.

@@ -20,7 +20,7 @@ import sys
 import threading
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from . import cells, continuum, materials, sweep
 from ._core import CONTACT_FACETS, CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, Packing, TidensError, UnsupportedError, __version__
@@ -228,6 +228,17 @@ def _pct(value: float | None) -> str:
     return "-" if value is None else f"{100 * value:.2f} %"
 
 
+def _error(est: dict[str, Any], key: str) -> str:
+    """The estimated relative error of t(rho) at mark ``key``, or, where the
+    mesh's part was not estimated (no coarser companion), the time
+    control's part marked "t"."""
+    total = est["relative"].get(key)
+    if total is not None:
+        return _pct(total)
+    time_part = (est.get("time") or {}).get(key)
+    return "-" if time_part is None else f"{_pct(time_part)} t"
+
+
 def _report(result: Result) -> None:
     s = result.summary()
     cell, contact = s["cell"], s["contact"]
@@ -248,8 +259,10 @@ def _report(result: Result) -> None:
         if fe is None and not result.rho0 < r <= s["final_density"]:
             continue  # not on the run's curve
         cm = s["continuum_times_to_density_s"].get(k)
-        print(f"{r:5.2f} {_fmt(fe):>12} {_pct(est['relative'].get(k)):>10} {_fmt(cm):>16}")
+        print(f"{r:5.2f} {_fmt(fe):>12} {_error(est, k):>10} {_fmt(cm):>16}")
     print(f"error estimate: {est['method']['mesh']}")
+    if any(est["relative"].get(k) is None and (est.get("time") or {}).get(k) is not None for k in est["relative"]):
+        print("  (t: the time control's error alone, where the mesh's was not estimated)")
     search = s["accuracy"]
     if search is not None:
         rungs = ", ".join(
