@@ -388,6 +388,8 @@ def make(
             raise ValueError(f"figures: {fig!r} is not one of {', '.join(FIGURES)}")
     if isinstance(level, bool) or not isinstance(level, int) or not 1 <= level:
         raise ValueError(f"level = {level!r}: must be a whole number >= 1")
+    if not isinstance(draw_only, bool):
+        raise TypeError(f"draw_only = {draw_only!r}: must be True or False")
     out = Path(out_dir)
     runs = plan(level, figures)
     jobs = sorted(runs.jobs.values(), key=_cost, reverse=True)
