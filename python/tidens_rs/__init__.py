@@ -9,7 +9,7 @@ Units everywhere: mm, N, MPa, s. A run in a few lines::
     result.plot("density.png"); result.write_vtu("out/")
 """
 
-from . import cells, continuum, materials, packing, similarity, sweep
+from . import cells, continuum, materials, packing, signals, similarity, sweep
 from ._core import (
     CONTACT_FACETS,
     CONTACT_MODES,
@@ -53,6 +53,7 @@ __all__ = [
     "materials",
     "packing",
     "resume",
+    "signals",
     "similarity",
     "sweep",
 ]

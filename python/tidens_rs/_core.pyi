@@ -238,7 +238,12 @@ class Simulation:
     def checkpoint(self) -> bytes:
         """The run's state as bytes (give them back as resume_from)."""
     def advance(self) -> dict[str, float]:
-        """One converged step (GIL released); returns its curve point."""
+        """One converged step (GIL released); returns its curve point.
+
+        Python's signal handlers run before each Newton iteration: Ctrl-C
+        (or any handler that raises) abandons the step within one
+        iteration, raising what the handler raised, the state left at the
+        last converged step. Raises ConvergenceError if the step fails."""
     def run(self, callback: Callable[[dict[str, float]], bool | None] | None = None) -> str:
         """Steps to the stop condition; `callback(point)` after each step, returning False stops."""
     @property

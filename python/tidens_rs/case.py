@@ -16,6 +16,7 @@ from . import _checks, _core, cells, io
 from ._core import CONTACT_FACETS, CONTACT_MODES, ELEMENTS, SOLVER_DEFAULTS, Cell, ConvergenceError, Material
 from .estimate import COMPANION_TOLERANCE_FACTOR, ErrorEstimate, estimate_error
 from .result import MARK_DENSITIES, Result
+from .signals import Terminated
 from .snapshot import Snapshot
 
 # Curve columns the error estimate reads.
@@ -575,7 +576,9 @@ class Case:
             message = str(e)
             error = e
         except KeyboardInterrupt as e:
-            status, message, error = "interrupted", "interrupted by the user", e
+            # Ctrl-C, or SIGTERM inside signals.sigterm_stops.
+            status, error = "interrupted", e
+            message = str(e) if isinstance(e, Terminated) else "interrupted by the user"
         except io.OutputError as e:
             status, message, error = "output_failed", str(e), e
         curve = sim.curve()

@@ -27,6 +27,7 @@ from ._core import CONTACT_FACETS, CONTACT_MODES, ELEMENTS, Cell, ConvergenceErr
 from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, FINISHED, Case, SolverSettings, load, resume
 from .io import check_output_dir
 from .result import MARK_DENSITIES, Result
+from .signals import EXIT_TERMINATED, Terminated, sigterm_stops
 
 # The solver defaults, as the Python API has them (the core's), and the case's.
 _DEFAULTS = SolverSettings()
@@ -646,7 +647,8 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """The command; returns its exit status: 0 done, 2 bad input (one line
     naming the option), 1 a file that cannot be read or written, 3 a solver
-    failure (partial results written), 130 interrupted."""
+    failure (partial results written), 130 interrupted (Ctrl-C), 143
+    terminated (SIGTERM; partial results written, as for Ctrl-C)."""
     parser = build_parser()
     args = parser.parse_args(_glue_negative_numbers(sys.argv[1:] if argv is None else argv))
     if args.command == "demo":
@@ -657,17 +659,18 @@ def main(argv: Sequence[str] | None = None) -> int:
         ] + (["--quiet"] if args.quiet else [])
         args = parser.parse_args(argv2)
     try:
-        if args.command == "continuum":
-            return _continuum(args)
-        if args.command == "sweep":
-            return _sweep(args)
-        if args.command == "figures":
-            return _figures(args)
-        if args.command == "pack":
-            return _pack(args)
-        if args.command == "show":
-            return _show(args)
-        return _run(args)
+        with sigterm_stops():
+            if args.command == "continuum":
+                return _continuum(args)
+            if args.command == "sweep":
+                return _sweep(args)
+            if args.command == "figures":
+                return _figures(args)
+            if args.command == "pack":
+                return _pack(args)
+            if args.command == "show":
+                return _show(args)
+            return _run(args)
     except (ValueError, TypeError, FileExistsError, UnsupportedError) as e:
         parser.error(str(e))
     except OSError as e:
@@ -676,10 +679,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except TidensError as e:
         print(f"tidens: {e}", file=sys.stderr)
         return 3
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as e:
         out = getattr(args, "out", None)
-        print("tidens: interrupted" + ("" if out is None else f"; partial results in {out}"), file=sys.stderr)
-        return 130
+        said = str(e) if isinstance(e, Terminated) else "interrupted"
+        print(f"tidens: {said}" + ("" if out is None else f"; partial results in {out}"), file=sys.stderr)
+        return EXIT_TERMINATED if isinstance(e, Terminated) else 130
 
 
 if __name__ == "__main__":

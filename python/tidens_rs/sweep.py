@@ -48,6 +48,7 @@ from . import materials as presets
 from ._core import ConvergenceError, Material
 from .case import FINISHED, Case, resume
 from .result import MARK_DENSITIES
+from .signals import EXIT_TERMINATED, Terminated, sigterm_stops
 
 TABLE_CSV = "sweep.csv"
 TABLE_PARQUET = "sweep.parquet"
@@ -272,10 +273,18 @@ def execute(
                     done(run_point(*a))
             else:
                 threads = worker_threads(cores, n, sum(not _done_earlier(out / p.name) for p in points))
+                group = _Workers(threads)
                 with ThreadPoolExecutor(max_workers=n) as pool:
-                    futures = [pool.submit(_run_in_process, *a, threads) for a in args]
-                    for f in as_completed(futures):
-                        done(f.result())
+                    futures = [pool.submit(group.run, *a) for a in args]
+                    try:
+                        for f in as_completed(futures):
+                            done(f.result())
+                    except Terminated:
+                        # This process got SIGTERM: so do the workers, which
+                        # stop their runs as it does (summaries written,
+                        # resumable); no worker starts after this.
+                        group.stop()
+                        raise
     finally:
         stop.set()
         if watcher is not None:
@@ -367,11 +376,17 @@ def run_point(
             )
     except ConvergenceError as e:
         reason = str(e)
+    return _summary_row(point, folder, reason, time.perf_counter() - t0)
+
+
+def _summary_row(point: Point, folder: Path, reason: str, wall_seconds: float) -> dict[str, Any]:
+    """The row of ``point`` from the summary in ``folder``; without one,
+    status ``failed`` after ``wall_seconds``."""
     summary = _read_summary(folder)
     row = _point_row(point, folder, reason)
     if summary is None:
         row["status"] = "failed"
-        row["wall_seconds"] = time.perf_counter() - t0
+        row["wall_seconds"] = wall_seconds
         return row
     times = summary.get("times_to_density_s", {})
     errors = (summary.get("error_estimate") or {}).get("relative", {})
@@ -478,42 +493,68 @@ def _numbers(name: str, values: Sequence[float] | None, default: list[float]) ->
     return out
 
 
-def _run_in_process(
-    out_dir: str,
-    point: Point,
-    until_density: float | None,
-    until_time_s: float | None,
-    error_estimate: bool,
-    threads: int = 1,
-) -> dict[str, Any]:
-    """:func:`run_point` in a worker process of its own (``python -m
-    tidens_rs.sweep``, with ``threads`` solver threads: the workers share
-    the machine's cores), so that the caller's script needs no ``__main__``
-    guard and a worker that dies takes no other point with it."""
-    job = {
-        "out_dir": out_dir,
-        "point": asdict(point),
-        "until_density": until_density,
-        "until_time_s": until_time_s,
-        "error_estimate": error_estimate,
-    }
-    env = dict(os.environ, RAYON_NUM_THREADS=str(threads))
-    done = subprocess.run(
-        [sys.executable, "-m", "tidens_rs.sweep"],
-        input=json.dumps(io._json_safe(job)),
-        capture_output=True,
-        text=True,
-        env=env,
-        check=False,
-    )
-    lines = done.stdout.strip().splitlines()
-    if done.returncode == 0 and lines:
-        row: dict[str, Any] = json.loads(lines[-1])
+class _Workers:
+    """Worker processes running points (``python -m tidens_rs.sweep``, each
+    with ``threads`` solver threads: the workers share the machine's
+    cores), so that the caller's script needs no ``__main__`` guard and a
+    worker that dies takes no other point with it. :meth:`stop` sends
+    SIGTERM to the workers running and starts no more."""
+
+    def __init__(self, threads: int = 1) -> None:
+        self.threads = threads
+        self._lock = threading.Lock()
+        self._running: set[subprocess.Popen[str]] = set()
+        self._stopped = False
+
+    def run(
+        self,
+        out_dir: str,
+        point: Point,
+        until_density: float | None,
+        until_time_s: float | None,
+        error_estimate: bool,
+    ) -> dict[str, Any]:
+        """:func:`run_point` in a worker process of its own; its row."""
+        job = {
+            "out_dir": out_dir,
+            "point": asdict(point),
+            "until_density": until_density,
+            "until_time_s": until_time_s,
+            "error_estimate": error_estimate,
+        }
+        env = dict(os.environ, RAYON_NUM_THREADS=str(self.threads))
+        with self._lock:
+            if self._stopped:
+                return _point_row(point, Path(out_dir) / point.name, "not started: the sweep was terminated")
+            worker = subprocess.Popen(
+                [sys.executable, "-m", "tidens_rs.sweep"],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+                env=env,
+            )
+            self._running.add(worker)
+        try:
+            stdout, stderr = worker.communicate(json.dumps(io._json_safe(job)))
+        finally:
+            with self._lock:
+                self._running.discard(worker)
+        lines = stdout.strip().splitlines()
+        if worker.returncode in (0, EXIT_TERMINATED) and lines:
+            row: dict[str, Any] = json.loads(lines[-1])
+            return row
+        tail = " ".join(stderr.strip().splitlines()[-3:])
+        row = _point_row(point, Path(out_dir) / point.name, f"worker exited with status {worker.returncode}: {tail}")
+        row["status"] = "failed"
         return row
-    tail = " ".join(done.stderr.strip().splitlines()[-3:])
-    row = _point_row(point, Path(out_dir) / point.name, f"worker exited with status {done.returncode}: {tail}")
-    row["status"] = "failed"
-    return row
+
+    def stop(self) -> None:
+        """SIGTERM to the running workers; no worker starts after this."""
+        with self._lock:
+            self._stopped = True
+            for worker in self._running:
+                worker.terminate()
 
 
 def _point_row(point: Point, folder: Path, reason: str) -> dict[str, Any]:
@@ -537,7 +578,15 @@ def _worker_main() -> None:
     job = json.loads(sys.stdin.read())
     fields = job["point"]
     point = Point(**{**fields, "snapshot_densities": tuple(fields.get("snapshot_densities", ()))})
-    row = run_point(job["out_dir"], point, job["until_density"], job["until_time_s"], job["error_estimate"])
+    t0 = time.perf_counter()
+    try:
+        with sigterm_stops():
+            row = run_point(job["out_dir"], point, job["until_density"], job["until_time_s"], job["error_estimate"])
+    except Terminated as e:
+        # The run stopped as by Ctrl-C (its summary says "interrupted").
+        row = _summary_row(point, Path(job["out_dir"]) / point.name, str(e), time.perf_counter() - t0)
+        print(json.dumps(io._json_safe(row)))
+        sys.exit(EXIT_TERMINATED)
     print(json.dumps(io._json_safe(row)))
 
 

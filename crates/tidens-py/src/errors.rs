@@ -6,7 +6,7 @@
 //! `ConvergenceError`; the simulation then keeps its last converged state.
 
 use pyo3::create_exception;
-use pyo3::exceptions::{PyException, PyValueError};
+use pyo3::exceptions::{PyException, PyKeyboardInterrupt, PyValueError};
 use pyo3::prelude::*;
 use tidens_material::MaterialError;
 use tidens_mesh::MeshError;
@@ -155,6 +155,9 @@ pub(crate) fn solver_error(err: SolverError, phase: Phase) -> PyErr {
         | SolverError::NoConvergence { .. }
         | SolverError::StepLimit { .. } => ConvergenceError::new_err(err.to_string()),
         SolverError::Internal(_) => TidensError::new_err(err.to_string()),
+        // Only a signal handler's exception interrupts a step (see
+        // `StepError::Signal`); this is the fallback.
+        SolverError::Interrupted { .. } => PyKeyboardInterrupt::new_err(err.to_string()),
     }
 }
 
@@ -168,6 +171,9 @@ pub(crate) const CONVERGENCE_ATTRIBUTES: [&str; 5] = ["time_s", "step", "dt_s", 
 /// (the attributes of the exception need it).
 pub(crate) enum StepError {
     Solver(SolverError),
+    /// What a Python signal handler raised in the middle of the step (Ctrl-C:
+    /// KeyboardInterrupt); the step was abandoned.
+    Signal(PyErr),
     Poisoned,
 }
 
@@ -175,6 +181,7 @@ impl StepError {
     pub(crate) fn into_py(self, py: Python<'_>) -> PyErr {
         let err = match self {
             StepError::Poisoned => return poisoned(),
+            StepError::Signal(e) => return e,
             StepError::Solver(err) => err,
         };
         let (time, step, dt, reason): (Option<f64>, Option<usize>, Option<f64>, &str) = match &err {

@@ -20,7 +20,7 @@ use pyo3::types::{PyBool, PyDict};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 use tidens_solver::{
     Checkpoint, ContactMode, ContactOptions, CurvePoint, ElementKind, HexFacets, LoadHistory,
-    MeshOptions, NewtonSettings, RunStats, Scene, Settings, Simulation, Status,
+    MeshOptions, NewtonSettings, RunStats, Scene, Settings, Simulation, SolverError, Status,
 };
 
 /// The Python names of the contact modes, in the order of `CONTACT_MODES`.
@@ -391,12 +391,31 @@ impl PySimulation {
     }
 
     /// One step of the core simulation; to be called with the GIL released.
+    ///
+    /// Before each Newton iteration it takes the GIL for a moment to run
+    /// Python's signal handlers (in the main thread; elsewhere that does
+    /// nothing): Ctrl-C, or a handler raising on SIGTERM, abandons the step
+    /// within one iteration, the state left at the last converged step. No
+    /// Simulation method locks `sim` while holding the GIL, so taking the
+    /// GIL here cannot deadlock.
     fn step(&self) -> Result<CurvePoint, StepError> {
         let mut sim = self.sim.lock().map_err(|_| StepError::Poisoned)?;
-        let point = sim.advance().cloned();
+        let mut raised: Option<PyErr> = None;
+        let point = sim
+            .advance_unless(&mut || match Python::attach(|py| py.check_signals()) {
+                Ok(()) => false,
+                Err(e) => {
+                    raised = Some(e);
+                    true
+                }
+            })
+            .cloned();
         // Failed steps change the totals too (failed attempts).
         self.progress().refresh(&sim);
-        point.map_err(StepError::Solver)
+        match (point, raised) {
+            (Err(SolverError::Interrupted { .. }), Some(e)) => Err(StepError::Signal(e)),
+            (point, _) => point.map_err(StepError::Solver),
+        }
     }
 }
 
@@ -566,6 +585,9 @@ impl PySimulation {
     /// cells of octants).
     /// Once stopped, returns the last point again. Raises ConvergenceError if
     /// the step fails; the state stays at the last converged step.
+    /// Python's signal handlers run before each Newton iteration: Ctrl-C (or
+    /// any handler that raises) abandons the step within one iteration,
+    /// raising what the handler raised, the state at the last converged step.
     fn advance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let point = py.detach(|| self.step()).map_err(|e| e.into_py(py))?;
         point_dict(py, &point)
@@ -574,7 +596,8 @@ impl PySimulation {
     /// Steps to the stop condition; `callback(point)` after each step, returning False stops.
     ///
     /// Each step runs with the GIL released; Ctrl-C raises KeyboardInterrupt
-    /// between steps, leaving the state at the last converged step. Returns
+    /// within one Newton iteration (see advance), leaving the state at the
+    /// last converged step. Returns
     /// the status: "running" (stopped by the callback), "reached_density",
     /// "reached_time" or "full_density" (the pores closed: rho reached
     /// 0.9999 first). Raises ConvergenceError if a step fails.

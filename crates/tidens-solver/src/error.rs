@@ -41,6 +41,11 @@ pub enum SolverError {
     /// A broken invariant of the solver (a bug: please report it).
     #[error("internal error: {0}")]
     Internal(&'static str),
+    /// The caller asked the run to stop in the middle of a step (see
+    /// [`crate::Simulation::advance_unless`]); the state is the last
+    /// converged step's.
+    #[error("interrupted at t = {time:.6e} s, in step {step}")]
+    Interrupted { time: f64, step: usize },
     /// The step limit was reached before the stop condition.
     #[error("step limit {max_steps} reached at t = {time:.6e} s, density {density:.5}")]
     StepLimit {
@@ -118,6 +123,10 @@ pub enum StepFailure {
     /// Every point the line search tried inverted an element.
     #[error("every line-search point inverts an element")]
     LineSearch,
+    /// The caller asked the run to stop (not a failure of the step: the
+    /// step is abandoned, not cut back).
+    #[error("interrupted")]
+    Interrupted,
 }
 
 impl StepFailure {
@@ -131,6 +140,7 @@ impl StepFailure {
             StepFailure::ContactPenetration { .. } => "contact_penetration",
             StepFailure::Iterations { .. } => "newton_iterations",
             StepFailure::LineSearch => "line_search",
+            StepFailure::Interrupted => "interrupted",
         }
     }
 }

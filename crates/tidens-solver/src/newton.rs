@@ -504,7 +504,14 @@ impl Simulation {
     /// are unchanged and Newton contracts the residual fast enough with it
     /// (modified Newton); otherwise the tangent is assembled and factorised
     /// afresh. The tangent is computed only in evaluations that may need it.
-    pub(crate) fn solve_step(&mut self, dt: f64) -> Result<Solved, Failed> {
+    ///
+    /// `interrupted` is asked before each Newton iteration; when it answers
+    /// true the solve ends with [`StepFailure::Interrupted`].
+    pub(crate) fn solve_step(
+        &mut self,
+        dt: f64,
+        interrupted: &mut dyn FnMut() -> bool,
+    ) -> Result<Solved, Failed> {
         let t1 = self.state.time + dt;
         let force = self.full_force * self.settings.load.factor(t1);
         let tol = self.settings.newton.residual_tolerance * force.max(1e-3 * self.full_force);
@@ -597,6 +604,9 @@ impl Simulation {
         let mut relinked = false;
         let mut debug_pressed: Vec<(ContactLink, f64, f64, [f64; 2])> = Vec::new();
         loop {
+            if interrupted() {
+                return Err(fail(StepFailure::Interrupted, iterations));
+            }
             let mut map = self.constraints.equation_map();
             let mut r = self.residual(&eval.f_int, &map, force);
             // Contact: catch penetrating nodes at once; release tensile

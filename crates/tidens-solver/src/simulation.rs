@@ -5,7 +5,7 @@
 
 use crate::assembler::Assembler;
 use crate::constraints::{Constraints, PlaneContactState};
-use crate::error::{LinearError, SolverError};
+use crate::error::{LinearError, SolverError, StepFailure};
 use crate::evaluation::Evaluation;
 use crate::linear::LinearSolver;
 use crate::newton::{FactorKey, Solved};
@@ -623,8 +623,21 @@ impl Simulation {
     /// converged step, so the curve so far is kept. The time it takes is
     /// added to [`RunStats::wall_seconds`].
     pub fn advance(&mut self) -> Result<&CurvePoint, SolverError> {
+        self.advance_unless(&mut || false)
+    }
+
+    /// [`Simulation::advance`], asking `interrupted` before each Newton
+    /// iteration (a step of a large cell can take minutes; an iteration
+    /// seconds). When it answers true, the step is abandoned: the state
+    /// stays at the last converged step, as after a failure, and the error
+    /// is [`SolverError::Interrupted`]. The abandoned iterations count in
+    /// [`RunStats::newton_iterations`], not as a failed attempt.
+    pub fn advance_unless(
+        &mut self,
+        interrupted: &mut dyn FnMut() -> bool,
+    ) -> Result<&CurvePoint, SolverError> {
         let start = std::time::Instant::now();
-        let outcome = self.step_once();
+        let outcome = self.step_once(interrupted);
         self.stats.wall_seconds += start.elapsed().as_secs_f64();
         outcome?;
         self.curve
@@ -634,7 +647,7 @@ impl Simulation {
 
     /// One converged step, or the reason there is none (see
     /// [`Simulation::advance`]).
-    fn step_once(&mut self) -> Result<(), SolverError> {
+    fn step_once(&mut self, interrupted: &mut dyn FnMut() -> bool) -> Result<(), SolverError> {
         if self.status != Status::Running {
             return Ok(());
         }
@@ -649,7 +662,7 @@ impl Simulation {
         let mut iterations = 0;
         loop {
             let saved = self.contact_snapshot();
-            match self.solve_step(dt) {
+            match self.solve_step(dt, interrupted) {
                 Ok(solved) => {
                     iterations += solved.iterations;
                     match self.accept_or_reject(solved, dt, iterations) {
@@ -660,6 +673,14 @@ impl Simulation {
                             dt = shorter;
                         }
                     }
+                }
+                Err(f) if matches!(f.reason, StepFailure::Interrupted) => {
+                    self.restore_contact(saved);
+                    self.stats.newton_iterations += iterations + f.iterations;
+                    return Err(SolverError::Interrupted {
+                        time: self.state.time,
+                        step: self.stats.steps + 1,
+                    });
                 }
                 Err(f) => {
                     iterations += f.iterations;
@@ -810,7 +831,7 @@ impl Simulation {
 
 #[cfg(test)]
 mod tests {
-    use crate::NewtonSettings;
+    use crate::{NewtonSettings, Simulation};
 
     /// A failed attempt changes the contact state (planes caught or
     /// released, particle contact pressures), and the cut back restores it
@@ -831,7 +852,7 @@ mod tests {
         // after the active sets moved.
         sim.settings.newton.max_iterations = 2;
         let dt = 10.0 * sim.propose_dt();
-        let failed = sim.solve_step(dt);
+        let failed = sim.solve_step(dt, &mut || false);
         assert!(failed.is_err());
         assert!(
             sim.contact_snapshot() != before,
@@ -846,5 +867,85 @@ mod tests {
         // And the run goes on from there.
         sim.settings.newton.max_iterations = NewtonSettings::default().max_iterations;
         assert!(sim.advance().is_ok());
+    }
+
+    /// A step abandoned at the caller's request leaves the last converged
+    /// step as it was: abandoned before its first Newton iteration, the run
+    /// goes on bit for bit like one never interrupted; abandoned after one
+    /// iteration (whose factor it keeps), it converges to the same step
+    /// within Newton's tolerance.
+    #[test]
+    fn an_interrupted_step_leaves_the_last_converged_step() {
+        let settings = |s: &mut crate::Settings| {
+            s.until_density = Some(0.9);
+            s.tolerance = 0.05;
+        };
+        let (mut through, mut stopped) = (
+            crate::test_support::bcc_level1(settings),
+            crate::test_support::bcc_level1(settings),
+        );
+        while through.rel_density() < 0.72 {
+            through.advance().unwrap();
+            stopped.advance().unwrap();
+        }
+        let (u, contact, steps) = (
+            stopped.state.u.clone(),
+            stopped.contact_snapshot(),
+            stopped.curve.len(),
+        );
+        let unchanged = |sim: &Simulation| {
+            assert_eq!(sim.state.u, u, "the converged displacement");
+            assert!(sim.contact_snapshot() == contact, "the contact state");
+            assert_eq!(sim.curve.len(), steps, "the curve");
+            assert_eq!(sim.stats.steps + 1, steps, "the step count");
+        };
+        let err = stopped.advance_unless(&mut || true).unwrap_err();
+        assert!(
+            matches!(err, crate::SolverError::Interrupted { step, .. } if step == steps),
+            "{err}"
+        );
+        unchanged(&stopped);
+        let point = through.advance().unwrap().clone();
+        assert_eq!(stopped.advance().unwrap(), &point);
+
+        let (u, contact, steps) = (
+            stopped.state.u.clone(),
+            stopped.contact_snapshot(),
+            stopped.curve.len(),
+        );
+        let (iterations, failed) = (
+            stopped.stats.newton_iterations,
+            stopped.stats.failed_attempts,
+        );
+        let before = stopped.rel_density();
+        let mut asked = 0;
+        let err = stopped
+            .advance_unless(&mut || {
+                asked += 1;
+                asked > 1
+            })
+            .unwrap_err();
+        assert!(
+            matches!(err, crate::SolverError::Interrupted { .. }),
+            "{err}"
+        );
+        let unchanged = |sim: &Simulation| {
+            assert_eq!(sim.state.u, u, "the converged displacement");
+            assert!(sim.contact_snapshot() == contact, "the contact state");
+            assert_eq!(sim.curve.len(), steps, "the curve");
+        };
+        unchanged(&stopped);
+        assert_eq!(stopped.stats.newton_iterations, iterations + 1);
+        assert_eq!(stopped.stats.failed_attempts, failed);
+        let point = through.advance().unwrap().clone();
+        let again = stopped.advance().unwrap();
+        assert_eq!(again.time, point.time, "the same step");
+        let rise = point.rel_density - before;
+        assert!(
+            (again.rel_density - point.rel_density).abs() < 1e-3 * rise,
+            "{} against {} (the step's rise {rise:.3e})",
+            again.rel_density,
+            point.rel_density
+        );
     }
 }
