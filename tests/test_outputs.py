@@ -5,6 +5,7 @@ import csv
 import errno
 import json
 import re
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -201,6 +202,42 @@ def test_a_run_resumed_with_another_checkpoint_interval_records_and_keeps_it(tmp
     sim = case.simulation(0.8, None, [], resume_from=(out / "checkpoint.bin").read_bytes())
     steps = len(resumed.time_s) - 1
     assert len(sim.curve()["time_s"]) - 1 == steps - steps % 4
+
+
+def test_a_run_stopped_between_checkpoints_goes_on_from_its_last_step_if_asked(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    case = bcc_every_10()
+    through = case.run(until_density=0.8, out_dir=tmp_path / "through", error_estimate=False)
+    out = tmp_path / "stopped"
+    stopped_at(case, 25, out)
+    stop = out / "checkpoint_stop.bin"
+    assert stop.exists()
+    with pytest.raises(TypeError, match="from_last_step"):
+        td.resume(out, from_last_step=1)  # type: ignore[arg-type]
+
+    def first_step(**kwargs: Any) -> int:
+        """The first step a resume into a copy of the stopped run takes."""
+        copy = tmp_path / f"copy{len(list(tmp_path.iterdir()))}"
+        shutil.copytree(out, copy)
+        steps: list[int] = []
+        td.resume(copy, callback=lambda p: steps.append(int(p["step"])), **kwargs)
+        return steps[0]
+
+    # By default from the checkpoint at step 20, to the bit; asked, from
+    # step 25.
+    assert first_step() == 21
+    assert first_step(from_last_step=True) == 26
+    # From the command line; the run ends at the time the through run
+    # does, to round-off (the resumed run has no cached factor at step
+    # 25), and the stop's state is gone once a checkpoint passed it.
+    assert main(["run", "--resume", str(out), "--from-last-step", "--quiet", "--no-plot"]) == 0
+    resumed = td.load(out)
+    for column, values in through.curve.items():
+        assert np.array_equal(values[:26], resumed.curve[column][:26], equal_nan=True), column
+    assert resumed.time_to_density(0.8) == pytest.approx(through.time_to_density(0.8), rel=1e-4)
+    assert not stop.exists()
+    with pytest.raises(SystemExit) as e:
+        main(["run", "--from-last-step", "--stress", "10", "--out", str(tmp_path / "new")])
+    assert e.value.code == 2 and "--from-last-step goes with --resume" in capsys.readouterr().err
 
 
 def test_a_run_without_a_summary_loads_as_far_as_it_got(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

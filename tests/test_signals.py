@@ -80,12 +80,16 @@ def test_sigterm_stops_a_run_as_ctrl_c_does(tmp_path: Path) -> None:
     process.send_signal(signal.SIGTERM)
     _, err = process.communicate(timeout=60)
     assert process.returncode == 128 + signal.SIGTERM, err
-    assert err.strip().splitlines()[-1] == f"tidens: terminated by SIGTERM; partial results in {out}"
+    said = err.strip().splitlines()
+    assert f"tidens: terminated by SIGTERM; partial results in {out}" in said, err
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "interrupted" and summary["message"] == "terminated by SIGTERM"
     assert rows(out / "curve.csv") == summary["steps"] + 1 and summary["final_density"] < 0.8
-    # It goes on from its checkpoint to the end.
-    resumed = subprocess.run([*COMMAND, "run", "--resume", str(out), "--quiet", "--no-plot"], capture_output=True, text=True, check=False)
+    # Stopped between two checkpoints (every 50 steps): its last step is
+    # saved too, and the message says how to go on from either.
+    assert summary["steps"] % 50 != 0 and (out / "checkpoint_stop.bin").exists()
+    assert said[-1].startswith(f"tidens: go on with tidens run --resume {out} ") and "--from-last-step" in said[-1]
+    resumed = subprocess.run([*COMMAND, "run", "--resume", str(out), "--from-last-step", "--quiet", "--no-plot"], capture_output=True, text=True, check=False)
     assert resumed.returncode == 0, resumed.stderr
     assert json.loads((out / "summary.json").read_text())["status"] == "reached_density"
 

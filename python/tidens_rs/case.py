@@ -25,6 +25,8 @@ ESTIMATE_COLUMNS = ("time_s", "rel_density", "time_error_s")
 # What a run with an output folder writes there to be resumed.
 RUN_FILE = "run.json"
 CHECKPOINT_FILE = "checkpoint.bin"
+# The state at a stop between two checkpoints (see resume's from_last_step).
+STOP_CHECKPOINT_FILE = "checkpoint_stop.bin"
 # Steps between checkpoints when SolverSettings.checkpoint_every is 0.
 CHECKPOINT_INTERVAL = 50
 
@@ -563,6 +565,8 @@ class Case:
                     writer.write(p)
                 if checkpoint_path is not None and every > 0 and int(p["step"]) % every == 0:
                     io.atomic_write(checkpoint_path, lambda tmp: tmp.write_bytes(sim.checkpoint()))
+                    # An earlier stop's state is behind this one now.
+                    _unlink(checkpoint_path.with_name(STOP_CHECKPOINT_FILE))
                 while pending_rho and p["rel_density"] >= pending_rho[0]:
                     snapshots.append(_snapshot(sim, f"rho{pending_rho.pop(0):.3f}", p))
                 while pending_t and p["time_s"] >= pending_t[0] * (1 - 1e-9):
@@ -584,12 +588,19 @@ class Case:
         curve = sim.curve()
         if writer is not None:
             error = _complete_curve(writer, curve, error)
+        # Whatever stopped the run, it can go on from here. With
+        # checkpoint_every, the last checkpoint at a multiple of it stays (a
+        # resume from there is exact, recomputing the steps since), and a
+        # stop between two of them is saved beside it (resume's
+        # from_last_step goes on from there).
+        stop_path = None
         if checkpoint_path is not None and self.solver.checkpoint_every == 0:
-            # Whatever stopped the run, it can go on from here. (With
-            # checkpoint_every, the last checkpoint at a multiple of it stays:
-            # a resume from there is exact, recomputing the steps since.)
+            stop_path = checkpoint_path
+        elif checkpoint_path is not None and status not in FINISHED and int(curve["step"][-1]) % every != 0:
+            stop_path = checkpoint_path.with_name(STOP_CHECKPOINT_FILE)
+        if stop_path is not None:
             try:
-                io.atomic_write(checkpoint_path, lambda tmp: tmp.write_bytes(sim.checkpoint()))
+                io.atomic_write(stop_path, lambda tmp: tmp.write_bytes(sim.checkpoint()))
             except io.OutputError as e:
                 error = error or e
         last = {k: v[-1] for k, v in curve.items()}
@@ -679,6 +690,7 @@ def resume(
     progress: bool = False,
     callback: ProgressCallback | None = None,
     checkpoint_every: int | None = None,
+    from_last_step: bool = False,
 ) -> Result:
     """Goes on with the run whose outputs are in ``out_dir``, from its last
     checkpoint (``checkpoint.bin``, written at the start and every
@@ -689,7 +701,14 @@ def resume(
     fields are those the uninterrupted run would have written: to the bit
     when the checkpoint was taken at a multiple of
     ``SolverSettings.checkpoint_every`` steps, within the Newton tolerance
-    otherwise. ``checkpoint_every`` (default: the recorded one) sets the
+    otherwise. A run stopped between two such checkpoints also saves its
+    last converged step (``checkpoint_stop.bin``); ``from_last_step=True``
+    goes on from there instead of recomputing the steps since the
+    checkpoint before (within the Newton tolerance of the uninterrupted
+    run, not to the bit: on a cell of many particles those steps can take
+    hours). Without that file (the stop fell on a checkpoint, or a later
+    checkpoint replaced it) it resumes from ``checkpoint.bin`` as without
+    the flag. ``checkpoint_every`` (default: the recorded one) sets the
     steps between checkpoints from here on, for a run whose steps turned
     out longer or shorter than expected; ``run.json`` then records it. The
     run goes on as one with that interval would from the checkpoint (the
@@ -697,7 +716,8 @@ def resume(
     moves a curve at round-off level, see ``SolverSettings``). Raises
     FileNotFoundError when the folder holds no run to resume, ValueError
     for a checkpoint of another case or version, TypeError or ValueError
-    for a ``checkpoint_every`` that is not a whole number >= 0."""
+    for a ``checkpoint_every`` that is not a whole number >= 0, TypeError
+    for a ``from_last_step`` that is not a bool."""
     out = _out_dir(out_dir)
     if out is None:
         raise TypeError("out_dir = None: give the folder of the run to resume")
@@ -714,11 +734,15 @@ def resume(
         until_density, until_time_s = args["until_density"], args["until_time_s"]
     except (ValueError, TypeError, KeyError) as e:
         raise ValueError(f"{run_file}: not the record of a run ({type(e).__name__}: {e})") from e
+    if not isinstance(from_last_step, bool):
+        raise TypeError(f"from_last_step = {from_last_step!r}: must be True or False")
     interval_changed = checkpoint_every is not None and checkpoint_every != case.solver.checkpoint_every
     if checkpoint_every is not None:
         case = replace(case, solver=replace(case.solver, checkpoint_every=checkpoint_every))
     earlier = [(t, name) for t, name in io.read_pvd(out / "fields.pvd") if name != "fields_final.vtu"]
-    sim = case.simulation(until_density, until_time_s, args["snapshot_times_s"], resume_from=checkpoint.read_bytes())
+    stop = out / STOP_CHECKPOINT_FILE
+    start = stop if from_last_step and stop.exists() else checkpoint
+    sim = case.simulation(until_density, until_time_s, args["snapshot_times_s"], resume_from=start.read_bytes())
     if interval_changed:
         io.write_json(run_file, {**data, "case": case.as_dict()})
     result, error = case._press(
@@ -829,6 +853,14 @@ def _complete_curve(writer: io.CurveWriter, curve: dict[str, Any], error: BaseEx
         except io.OutputError as e:
             error = error or e
     return error
+
+
+def _unlink(path: Path) -> None:
+    """Deletes ``path`` if it is there; OutputError naming it if it cannot."""
+    try:
+        path.unlink(missing_ok=True)
+    except OSError as e:
+        raise io.output_error(path, e) from e
 
 
 def _finish(result: Result, error: BaseException | None, out: Path | None) -> Result:

@@ -24,7 +24,7 @@ from typing import Any, NoReturn
 
 from . import cells, continuum, materials, sweep
 from ._core import CONTACT_FACETS, CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, Packing, TidensError, UnsupportedError, __version__
-from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, FINISHED, Case, SolverSettings, load, resume
+from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, FINISHED, STOP_CHECKPOINT_FILE, Case, SolverSettings, load, resume
 from .io import check_output_dir
 from .result import MARK_DENSITIES, Result
 from .signals import EXIT_TERMINATED, Terminated, sigterm_stops
@@ -155,6 +155,7 @@ def _add_run_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("output")
     g.add_argument("--out", type=_folder, help="output folder, new or empty (see --overwrite); required but with --resume")
     g.add_argument("--resume", type=_folder, metavar="DIR", help="go on with the run in DIR from its last checkpoint (written at the start and every --checkpoint-every steps), with the case it recorded: no other case option")
+    g.add_argument("--from-last-step", action="store_true", help="with --resume: go on from the last step of a run stopped between two checkpoints (saved as DIR/checkpoint_stop.bin), within the Newton tolerance of the uninterrupted run, rather than recompute the steps since the checkpoint before")
     g.add_argument("--checkpoint-every", type=int, default=None, help=f"steps between checkpoints in --out, from which --resume goes on bit for bit (the solver drops its cached factor there; default {_DEFAULTS.checkpoint_every}); 0: checkpoints every 50 steps and at any stop, resumed within the Newton tolerance; with --resume, from the checkpoint on (default: the run's)")
     g.add_argument("--overwrite", action="store_true", help="first delete the outputs of an earlier run in --out (curve, summary, fields, plot; nothing else)")
     g.add_argument("--vtu-densities", type=_float_list, help="comma-separated densities for VTU snapshots (default those of 0.6,0.7,0.8,0.9 above the cell's rho0)")
@@ -311,7 +312,7 @@ def _resume(args: argparse.Namespace) -> int:
     if not args.no_plot:
         threading.Thread(target=_import_matplotlib, daemon=True).start()
     try:
-        result = resume(out, progress=not args.quiet, checkpoint_every=args.checkpoint_every)
+        result = resume(out, progress=not args.quiet, checkpoint_every=args.checkpoint_every, from_last_step=args.from_last_step)
     except ConvergenceError as e:
         print(f"tidens: solver failure: {e} (partial results in {out})", file=sys.stderr)
         return 3
@@ -325,6 +326,8 @@ def _resume(args: argparse.Namespace) -> int:
 def _run(args: argparse.Namespace) -> int:
     if args.resume is not None:
         return _resume(args)
+    if args.from_last_step:
+        raise ValueError("--from-last-step goes with --resume DIR")
     for option, value in (("--stress", args.stress), ("--out", args.out)):
         if value is None:
             raise ValueError(f"{option} is required (unless --resume DIR)")
@@ -680,9 +683,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"tidens: {e}", file=sys.stderr)
         return 3
     except KeyboardInterrupt as e:
-        out = getattr(args, "out", None)
+        out = getattr(args, "out", None) or getattr(args, "resume", None)
         said = str(e) if isinstance(e, Terminated) else "interrupted"
         print(f"tidens: {said}" + ("" if out is None else f"; partial results in {out}"), file=sys.stderr)
+        if out is not None and (out / STOP_CHECKPOINT_FILE).exists():
+            print(f"tidens: go on with tidens run --resume {out} (from the last checkpoint, to the bit), or add --from-last-step (from the last step)", file=sys.stderr)
         return EXIT_TERMINATED if isinstance(e, Terminated) else 130
 
 

@@ -50,6 +50,7 @@ OUTPUT_PATTERNS = (
     "density.png",
     "run.json",
     "checkpoint.bin",
+    "checkpoint_stop.bin",
     "*.part",
 )
 
