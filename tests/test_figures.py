@@ -174,6 +174,8 @@ def test_drawing_only_draws_the_runs_as_their_folders_hold_them(tmp_path: Path, 
     folder = tmp_path / figures.RUNS
     with pytest.raises(TypeError, match="draw_only"):
         figures.make(tmp_path, figures=["random_packings"], draw_only="yes")  # type: ignore[arg-type]
+    with pytest.raises(TypeError, match="from_last_step"):
+        figures.make(tmp_path, figures=["random_packings"], draw_only=True, from_last_step=1)  # type: ignore[arg-type]
     # Nothing run yet: every run missing, none started, every figure drawn
     # (without a warning: no empty legend).
     with warnings.catch_warnings():

@@ -84,6 +84,34 @@ def test_a_point_under_way_is_reported_with_its_last_converged_step(tmp_path: Pa
         sweep.run(base(), tmp_path, until_density=UNTIL, workers=1, point_every_s=0)
 
 
+def test_a_restarted_sweep_goes_on_from_a_points_last_step_if_asked(tmp_path: Path) -> None:
+    first, second = sweep.plan(base(), stresses_mpa=[10.0, 5.0])
+    folder = tmp_path / first.name
+    # The first point was interrupted (Ctrl-C) at step 25: its last
+    # checkpoint is step 20, and step 25 is saved beside it.
+    def stop(p: dict[str, float]) -> None:
+        if p["step"] == 25:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        base().run(until_density=UNTIL, out_dir=folder, callback=stop, error_estimate=False)
+    stopped = np.loadtxt(folder / "curve.csv", delimiter=",", skiprows=1)
+    assert len(stopped) == 26 and (folder / "checkpoint_stop.bin").exists()
+    with pytest.raises(TypeError, match="from_last_step"):
+        sweep.run(base(), tmp_path, until_density=UNTIL, stresses_mpa=[10.0, 5.0], from_last_step="yes")  # type: ignore[arg-type]
+    # Step 20's checkpoint spoilt: a resume from it fails, one from the
+    # last step does not read it. In a worker process (two points).
+    (folder / "checkpoint.bin").write_bytes(b"spoilt")
+    rows = sweep.run(base(), tmp_path, until_density=UNTIL, stresses_mpa=[10.0, 5.0], workers=2, error_estimate=False,
+                     from_last_step=True)
+    assert [r["status"] for r in rows] == ["reached_density"] * 2, rows
+    resumed = np.loadtxt(folder / "curve.csv", delimiter=",", skiprows=1)
+    assert np.array_equal(resumed[:26], stopped, equal_nan=True)
+    whole = base().run(until_density=UNTIL, out_dir=tmp_path / "whole", error_estimate=False)
+    assert rows[0]["t_0.7_s"] == pytest.approx(whole.time_to_density(0.7), rel=1e-4)
+    assert not (folder / "checkpoint_stop.bin").exists()
+
+
 def test_a_restarted_sweep_resumes_an_interrupted_point_and_skips_finished_ones(tmp_path: Path) -> None:
     point = sweep.plan(base())[0]
     folder = tmp_path / point.name

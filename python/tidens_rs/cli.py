@@ -459,6 +459,7 @@ def _add_sweep_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--out", type=_folder, required=True, help="the sweep's folder: one folder per point and the table sweep.csv / sweep.parquet; a restarted sweep skips finished points and resumes interrupted ones")
     g.add_argument("--workers", type=int, help="worker processes on this machine, one point each, the cores shared among those running (default: the cores)")
     g.add_argument("--scheduler", metavar="ADDRESS", help="run the points on this Dask scheduler instead (tcp://host:port; its workers need tidens and see --out at the same path)")
+    g.add_argument("--from-last-step", action="store_true", help="an interrupted point goes on from the last step it saved at its stop, not from its last checkpoint (see tidens run --from-last-step)")
     g.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
@@ -486,6 +487,7 @@ def _sweep(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         error_estimate=args.error_estimate,
         progress=not args.quiet,
+        from_last_step=args.from_last_step,
     )
     marks = [f"{m:g}" for m in MARK_DENSITIES]
     print(f"{'point':<44} {'status':<16} " + " ".join(f"{'t(' + k + ') [s]':>13}" for k in marks))
@@ -506,13 +508,15 @@ def _add_figures_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress")
     p.add_argument("--draw-only", action="store_true",
                    help="run nothing: draw from the run folders in --out as they are (runs still going or stopped drawn to where they got, captions.md names them)")
+    p.add_argument("--from-last-step", action="store_true", help="an interrupted run goes on from the last step it saved at its stop, not from its last checkpoint (see tidens run --from-last-step)")
 
 
 def _figures(args: argparse.Namespace) -> int:
     from . import figures
 
     say = (lambda _m: None) if args.quiet else (lambda m: print(m, flush=True))
-    made = figures.make(args.out, level=args.level, figures=args.only, workers=args.workers, log=say, draw_only=args.draw_only)
+    made = figures.make(args.out, level=args.level, figures=args.only, workers=args.workers, log=say, draw_only=args.draw_only,
+                        from_last_step=args.from_last_step)
     failed = [r["name"] for r in made.runs if r["status"] not in FINISHED]
     for f in made.findings:
         print(f"  {f['verdict']:>13}: {f['claim']}")

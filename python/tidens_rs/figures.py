@@ -314,7 +314,7 @@ def _cost(job: Job) -> float:
 
 
 def _run_jobs(runs: Runs, jobs: Sequence[Job], out: Path, *, workers: int | None, progress: bool,
-              say: Callable[[str], None]) -> list[dict[str, Any]]:
+              say: Callable[[str], None], from_last_step: bool = False) -> list[dict[str, Any]]:
     """Runs ``jobs`` into ``out/runs`` (those finished there earlier are
     skipped) and loads their results into ``runs``; the sweep's table."""
     table = sweep.execute(
@@ -326,6 +326,7 @@ def _run_jobs(runs: Runs, jobs: Sequence[Job], out: Path, *, workers: int | None
         on_row=lambda row: say(row_line(row)),
         on_point=lambda name, p: say(point_line(name, p)),
         point_every_s=POINT_EVERY_S,
+        from_last_step=from_last_step,
     )
     for row in table:
         folder = Path(row["folder"])
@@ -369,6 +370,7 @@ def make(
     progress: bool = False,
     log: Callable[[str], None] | None = None,
     draw_only: bool = False,
+    from_last_step: bool = False,
 ) -> Made:
     """Runs what ``figures`` need at mesh ``level`` into ``out_dir/runs``
     (skipping runs finished there earlier), then draws the figures into
@@ -380,7 +382,9 @@ def make(
     stopped (no summary) is drawn to where its curve got, and
     ``captions.md`` names it; a run never started is missing from its
     figure. Its rows in ``Made.runs`` give each run's status (``missing``
-    for one never started)."""
+    for one never started). An interrupted run goes on from its last
+    checkpoint, or with ``from_last_step`` from the last step it saved at
+    its stop (see :func:`tidens_rs.resume`)."""
     start = time.perf_counter()
     say = log or (lambda _m: None)
     for fig in figures:
@@ -388,8 +392,9 @@ def make(
             raise ValueError(f"figures: {fig!r} is not one of {', '.join(FIGURES)}")
     if isinstance(level, bool) or not isinstance(level, int) or not 1 <= level:
         raise ValueError(f"level = {level!r}: must be a whole number >= 1")
-    if not isinstance(draw_only, bool):
-        raise TypeError(f"draw_only = {draw_only!r}: must be True or False")
+    for name, flag in (("draw_only", draw_only), ("from_last_step", from_last_step)):
+        if not isinstance(flag, bool):
+            raise TypeError(f"{name} = {flag!r}: must be True or False")
     out = Path(out_dir)
     runs = plan(level, figures)
     jobs = sorted(runs.jobs.values(), key=_cost, reverse=True)
@@ -398,7 +403,7 @@ def make(
         table = [_as_found(runs, job.name, out / RUNS / job.name, say) for job in jobs]
     else:
         say(f"{len(jobs)} runs at {levels_said(jobs, level)} into {out / RUNS}")
-        table = _run_jobs(runs, jobs, out, workers=workers, progress=progress, say=say)
+        table = _run_jobs(runs, jobs, out, workers=workers, progress=progress, say=say, from_last_step=from_last_step)
     made = Made(files=[], runs=table, wall_seconds=0.0)
     captions: list[str] = []
     findings: list[dict[str, Any]] = []

@@ -154,6 +154,7 @@ def run(
     on_row: Callable[[dict[str, Any]], None] | None = None,
     on_point: Callable[[str, dict[str, float]], None] | None = None,
     point_every_s: float = 60.0,
+    from_last_step: bool = False,
 ) -> list[dict[str, Any]]:
     """Runs the sweep of :func:`plan` into ``out_dir`` and returns the table
     (one row per point, keys :data:`COLUMNS`), also written to
@@ -163,7 +164,9 @@ def run(
     address of a Dask scheduler to run the points on instead. ``on_row`` is
     called with each row as its point finishes, ``on_point`` every
     ``point_every_s`` seconds with the last curve point of each point under
-    way (see :func:`execute`)."""
+    way (see :func:`execute`). An interrupted point goes on from its last
+    checkpoint (its curve to the bit), or with ``from_last_step`` from the
+    last step it saved at its stop (see :func:`tidens_rs.resume`)."""
     points = plan(base, stresses_mpa=stresses_mpa, materials=materials, cells=cells, aspect_ratios=aspect_ratios)
     return execute(
         points,
@@ -177,6 +180,7 @@ def run(
         on_row=on_row,
         on_point=on_point,
         point_every_s=point_every_s,
+        from_last_step=from_last_step,
     )
 
 
@@ -193,6 +197,7 @@ def execute(
     on_row: Callable[[dict[str, Any]], None] | None = None,
     on_point: Callable[[str, dict[str, float]], None] | None = None,
     point_every_s: float = 60.0,
+    from_last_step: bool = False,
 ) -> list[dict[str, Any]]:
     """Runs ``points`` (from :func:`plan`, or made otherwise: any cases, each
     with a folder name of its own) into ``out_dir`` as :func:`run` does, in
@@ -208,6 +213,8 @@ def execute(
         raise ValueError(f"point_every_s = {point_every_s!r}: must be a number of seconds > 0")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers = {workers!r}: must be a whole number >= 1")
+    if not isinstance(from_last_step, bool):
+        raise TypeError(f"from_last_step = {from_last_step!r}: must be True or False")
     if scheduler is not None and workers is not None:
         raise ValueError("workers and scheduler exclude each other: the scheduler's cluster has its workers")
     if len({p.name for p in points}) != len(points):
@@ -226,7 +233,7 @@ def execute(
         out.mkdir(parents=True, exist_ok=True)
     except OSError as e:
         raise io.output_error(out, e) from e
-    args = [(str(out), p, until_density, until_time_s, error_estimate) for p in points]
+    args = [(str(out), p, until_density, until_time_s, error_estimate, from_last_step) for p in points]
     rows: dict[str, dict[str, Any]] = {}
     bar = _progress(len(points)) if progress else None
 
@@ -350,10 +357,12 @@ def run_point(
     until_density: float | None,
     until_time_s: float | None,
     error_estimate: bool,
+    from_last_step: bool = False,
 ) -> dict[str, Any]:
     """Runs one point into ``out_dir/point.name`` (in a worker): nothing if
     the folder holds a finished run, a resume if it holds an interrupted
-    one, else the run afresh. Returns its row of the table."""
+    one (``from_last_step``: see :func:`tidens_rs.resume`), else the run
+    afresh. Returns its row of the table."""
     folder = Path(out_dir) / point.name
     summary = _read_summary(folder)
     t0 = time.perf_counter()
@@ -364,7 +373,8 @@ def run_point(
         if _done_earlier(folder):
             reason = (summary or {}).get("message") or ""  # done earlier
         elif started and status in (None, "interrupted"):
-            resume(folder, checkpoint_every=Case.from_dict(point.case).solver.checkpoint_every)
+            every = Case.from_dict(point.case).solver.checkpoint_every
+            resume(folder, checkpoint_every=every, from_last_step=from_last_step)
         else:
             Case.from_dict(point.case).run(
                 until_density,
@@ -513,6 +523,7 @@ class _Workers:
         until_density: float | None,
         until_time_s: float | None,
         error_estimate: bool,
+        from_last_step: bool,
     ) -> dict[str, Any]:
         """:func:`run_point` in a worker process of its own; its row."""
         job = {
@@ -521,6 +532,7 @@ class _Workers:
             "until_density": until_density,
             "until_time_s": until_time_s,
             "error_estimate": error_estimate,
+            "from_last_step": from_last_step,
         }
         env = dict(os.environ, RAYON_NUM_THREADS=str(self.threads))
         with self._lock:
@@ -581,7 +593,8 @@ def _worker_main() -> None:
     t0 = time.perf_counter()
     try:
         with sigterm_stops():
-            row = run_point(job["out_dir"], point, job["until_density"], job["until_time_s"], job["error_estimate"])
+            row = run_point(job["out_dir"], point, job["until_density"], job["until_time_s"], job["error_estimate"],
+                            job["from_last_step"])
     except Terminated as e:
         # The run stopped as by Ctrl-C (its summary says "interrupted").
         row = _summary_row(point, Path(job["out_dir"]) / point.name, str(e), time.perf_counter() - t0)
