@@ -844,18 +844,25 @@ impl Simulation {
 mod tests {
     use crate::{NewtonSettings, Simulation};
 
+    /// The bcc cell at level 1 (15 MPa, tolerance 0.05, to stop at rho =
+    /// 0.9) pressed to `rho`.
+    fn bcc_pressed_to(rho: f64) -> Simulation {
+        let mut sim = crate::test_support::bcc_level1(|s| {
+            s.until_density = Some(0.9);
+            s.tolerance = 0.05;
+        });
+        while sim.rel_density() < rho {
+            sim.advance().unwrap();
+        }
+        sim
+    }
+
     /// A failed attempt changes the contact state (planes caught or
     /// released, particle contact pressures), and the cut back restores it
     /// exactly, so the retry starts from the last converged step.
     #[test]
     fn a_failed_attempt_is_undone_exactly() {
-        let mut sim = crate::test_support::bcc_level1(|s| {
-            s.until_density = Some(0.9);
-            s.tolerance = 0.05;
-        });
-        while sim.rel_density() < 0.72 {
-            sim.advance().unwrap();
-        }
+        let mut sim = bcc_pressed_to(0.72);
         let before = sim.contact_snapshot();
         assert!(before.particles.as_ref().is_some_and(|p| !p.is_empty()));
         let u = sim.state.u.clone();
@@ -886,13 +893,7 @@ mod tests {
     /// 1.7e-5 s aimed at 1e-6 past a target 1e-9 ahead lost 1e-5).
     #[test]
     fn a_step_aimed_at_the_target_density_lands_past_it() {
-        let mut sim = crate::test_support::bcc_level1(|s| {
-            s.until_density = Some(0.9);
-            s.tolerance = 0.05;
-        });
-        while sim.rel_density() < 0.72 {
-            sim.advance().unwrap();
-        }
+        let mut sim = bcc_pressed_to(0.72);
         let rate = sim.density_rate().unwrap();
         let free = sim.propose_dt();
         let floor = free / super::TARGET_DENSITY_STEP_FLOOR;
