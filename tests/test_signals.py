@@ -113,3 +113,32 @@ def test_sigterm_to_a_sweep_stops_its_workers_runs(tmp_path: Path) -> None:
     counts = [rows(c) for c in curves]
     time.sleep(1.0)
     assert [rows(c) for c in curves] == counts
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the parent's death signal is Linux's")
+def test_a_sweep_killed_outright_leaves_no_worker_running(tmp_path: Path) -> None:
+    script = (
+        "import tidens_rs as td\n"
+        "from tidens_rs import sweep\n"
+        "base = td.Case(cell=td.cells.sc(), material=td.materials.TI64_CREEP_1293K, stress_mpa=10.0,\n"
+        "               solver=td.SolverSettings(mesh_level=3))\n"
+        f"sweep.run(base, {str(tmp_path)!r}, until_density=0.8, stresses_mpa=[5.0, 10.0], workers=2, error_estimate=False)\n"
+    )
+    process = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    names = ["sc-ti64-creep-1293k-5MPa-ca1", "sc-ti64-creep-1293k-10MPa-ca1"]
+    curves = [tmp_path / n / "curve.csv" for n in names]
+    wait_for_rows(curves, 5, process)
+    process.kill()  # SIGKILL: nothing runs in the sweep's process
+    process.communicate(timeout=60)
+    # Its workers got SIGTERM from the kernel and stopped their runs as
+    # Ctrl-C would.
+    summaries = [tmp_path / n / "summary.json" for n in names]
+    deadline = time.monotonic() + 60
+    while not all(s.exists() for s in summaries) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    for summary in summaries:
+        s = json.loads(summary.read_text())
+        assert s["status"] == "interrupted" and s["message"] == "terminated by SIGTERM", summary
+    counts = [rows(c) for c in curves]
+    time.sleep(1.0)
+    assert [rows(c) for c in curves] == counts

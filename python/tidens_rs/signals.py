@@ -17,7 +17,10 @@ inside it; a script can too::
 
 from __future__ import annotations
 
+import ctypes
+import os
 import signal
+import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -25,6 +28,8 @@ from types import FrameType
 
 # Exit status of a process ended by SIGTERM (128 + 15), as shells report it.
 EXIT_TERMINATED = 128 + signal.SIGTERM
+# prctl's option for the signal sent at the parent's death (linux/prctl.h).
+_PR_SET_PDEATHSIG = 1
 
 
 class Terminated(KeyboardInterrupt):
@@ -54,3 +59,22 @@ def sigterm_stops() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGTERM, before)
+
+
+def stop_with_parent(parent_pid: int) -> None:
+    """On Linux, has the kernel send this process SIGTERM when its parent
+    (process ``parent_pid``) dies, and sends it at once if the parent is gone
+    already; elsewhere does nothing. A sweep's worker processes call it
+    inside :func:`sigterm_stops`, so that a sweep killed outright (SIGKILL,
+    or SIGTERM to a script that does not catch it) leaves no worker running
+    on into its folders: each stops its run as on Ctrl-C."""
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGTERM), 0, 0, 0) != 0:
+            return
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent_pid:
+        os.kill(os.getpid(), signal.SIGTERM)

@@ -48,7 +48,7 @@ from . import materials as presets
 from ._core import ConvergenceError, Material
 from .case import FINISHED, Case, resume
 from .result import MARK_DENSITIES
-from .signals import EXIT_TERMINATED, Terminated, sigterm_stops
+from .signals import EXIT_TERMINATED, Terminated, sigterm_stops, stop_with_parent
 
 TABLE_CSV = "sweep.csv"
 TABLE_PARQUET = "sweep.parquet"
@@ -508,7 +508,9 @@ class _Workers:
     with ``threads`` solver threads: the workers share the machine's
     cores), so that the caller's script needs no ``__main__`` guard and a
     worker that dies takes no other point with it. :meth:`stop` sends
-    SIGTERM to the workers running and starts no more."""
+    SIGTERM to the workers running and starts no more; on Linux a worker
+    also gets SIGTERM when this process dies
+    (:func:`tidens_rs.signals.stop_with_parent`)."""
 
     def __init__(self, threads: int = 1) -> None:
         self.threads = threads
@@ -533,6 +535,7 @@ class _Workers:
             "until_time_s": until_time_s,
             "error_estimate": error_estimate,
             "from_last_step": from_last_step,
+            "parent_pid": os.getpid(),
         }
         env = dict(os.environ, RAYON_NUM_THREADS=str(self.threads))
         with self._lock:
@@ -593,6 +596,7 @@ def _worker_main() -> None:
     t0 = time.perf_counter()
     try:
         with sigterm_stops():
+            stop_with_parent(job["parent_pid"])
             row = run_point(job["out_dir"], point, job["until_density"], job["until_time_s"], job["error_estimate"],
                             job["from_last_step"])
     except Terminated as e:

@@ -15,7 +15,7 @@
 
 use metis_sys::{
     METIS_NOPTIONS, METIS_NodeND, METIS_SetDefaultOptions, idx_t,
-    moptions_et_METIS_OPTION_NUMBERING, rstatus_et_METIS_OK,
+    moptions_et_METIS_OPTION_NUMBERING, rstatus_et_METIS_ERROR, rstatus_et_METIS_OK,
 };
 use std::sync::{Mutex, PoisonError};
 
@@ -23,6 +23,48 @@ use std::sync::{Mutex, PoisonError};
 /// on each call: two calls at once from different threads would interleave
 /// their draws (a data race, and orderings that depend on timing).
 static METIS_LOCK: Mutex<()> = Mutex::new(());
+
+/// The process's handlers of SIGTERM and SIGABRT, saved around a METIS call.
+///
+/// GKlib (METIS's support library) takes both signals over for the length of
+/// every METIS call (a SIGTERM then ends the call with `METIS_ERROR`) and
+/// puts the old handlers back with `signal()`, which in this build makes
+/// them one-shot (`SA_RESETHAND`): after the first ordering, the handler
+/// Python installs for SIGTERM (`tidens_rs.signals.sigterm_stops`) ran once
+/// and the next SIGTERM killed the process mid-way through writing its
+/// summary (a sweep's worker whose parent died). [`SignalHandlers::restore`]
+/// puts them back exactly as they were.
+#[cfg(unix)]
+struct SignalHandlers([(libc::c_int, libc::sigaction); 2]);
+
+#[cfg(unix)]
+impl SignalHandlers {
+    fn save() -> Self {
+        Self([libc::SIGTERM, libc::SIGABRT].map(|signal| {
+            // SAFETY: a zeroed sigaction is a valid value for sigaction() to
+            // overwrite; a null new action only reads the current one.
+            let mut old: libc::sigaction = unsafe { std::mem::zeroed() };
+            unsafe { libc::sigaction(signal, std::ptr::null(), &mut old) };
+            (signal, old)
+        }))
+    }
+
+    /// Puts the saved handlers back; with `resend_term` (METIS ended with
+    /// `METIS_ERROR`, as a SIGTERM caught by GKlib makes it), sends this
+    /// thread SIGTERM again, so that the process's own handler (or the
+    /// default action, or none if ignored) sees the signal METIS swallowed.
+    fn restore(&self, resend_term: bool) {
+        for (signal, old) in &self.0 {
+            // SAFETY: `old` is what sigaction() returned for `signal`.
+            unsafe { libc::sigaction(*signal, old, std::ptr::null_mut()) };
+        }
+        let term = &self.0[0].1;
+        if resend_term && term.sa_sigaction != libc::SIG_IGN {
+            // SAFETY: raise() only sends a signal to the calling thread.
+            unsafe { libc::raise(libc::SIGTERM) };
+        }
+    }
+}
 
 /// Runs of consecutive equations with identical columns in the symmetric
 /// pattern (`col_ptr`, `row_idx`: compressed columns, both triangles, rows
@@ -76,11 +118,13 @@ pub(crate) fn nested_dissection(col_ptr: &[usize], row_idx: &[usize]) -> Option<
     let mut iperm = vec![0 as idx_t; m];
     let status = {
         let _lock = METIS_LOCK.lock().unwrap_or_else(PoisonError::into_inner);
+        #[cfg(unix)]
+        let handlers = SignalHandlers::save();
         // SAFETY: `options` has METIS_NOPTIONS entries; `xadj` has nvtxs + 1
         // entries indexing into `adjncy`; `vwgt`, `perm` and `iperm` have
         // nvtxs entries; METIS reads the graph and writes only the two
         // permutations.
-        unsafe {
+        let status = unsafe {
             METIS_SetDefaultOptions(options.as_mut_ptr());
             options[moptions_et_METIS_OPTION_NUMBERING as usize] = 0;
             METIS_NodeND(
@@ -92,7 +136,10 @@ pub(crate) fn nested_dissection(col_ptr: &[usize], row_idx: &[usize]) -> Option<
                 perm.as_mut_ptr(),
                 iperm.as_mut_ptr(),
             )
-        }
+        };
+        #[cfg(unix)]
+        handlers.restore(status == rstatus_et_METIS_ERROR);
+        status
     };
     if status != rstatus_et_METIS_OK {
         return None;
@@ -111,6 +158,35 @@ pub(crate) fn nested_dissection(col_ptr: &[usize], row_idx: &[usize]) -> Option<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    extern "C" fn on_term(_: libc::c_int) {}
+
+    /// A METIS call leaves the SIGTERM handler as it found it, flags and
+    /// all (GKlib's `signal()` put it back one-shot).
+    #[cfg(unix)]
+    #[test]
+    fn an_ordering_leaves_the_sigterm_handler_as_it_was() {
+        let read = || {
+            // SAFETY: as in `SignalHandlers::save`.
+            let mut now: libc::sigaction = unsafe { std::mem::zeroed() };
+            unsafe { libc::sigaction(libc::SIGTERM, std::ptr::null(), &mut now) };
+            (now.sa_sigaction, now.sa_flags)
+        };
+        // SAFETY: a handler that does nothing, installed for this test and
+        // put back after it.
+        let mut mine: libc::sigaction = unsafe { std::mem::zeroed() };
+        mine.sa_sigaction = on_term as extern "C" fn(libc::c_int) as libc::sighandler_t;
+        mine.sa_flags = libc::SA_ONSTACK;
+        let mut before: libc::sigaction = unsafe { std::mem::zeroed() };
+        unsafe { libc::sigaction(libc::SIGTERM, &mine, &mut before) };
+        let installed = read();
+        let (col_ptr, row_idx) = chain_of_runs(40, 3);
+        let ordered = nested_dissection(&col_ptr, &row_idx);
+        let after = read();
+        unsafe { libc::sigaction(libc::SIGTERM, &before, std::ptr::null_mut()) };
+        assert!(ordered.is_some());
+        assert_eq!(after, installed);
+    }
 
     /// Pattern of `groups` runs of `k` equations each, coupled along a chain
     /// of runs (both triangles, full diagonal).
