@@ -72,8 +72,8 @@ def run_once(tidens: str, name: str, out: Path, extra: list[str], env: dict[str,
         "assembly_s": stats.get("assembly_seconds"),
         "linear_s": stats.get("linear_seconds"),
         "dofs": summary["degrees_of_freedom"],
-        "mesh_level": summary["mesh_level"],
-        "tolerance": summary["tolerance"],
+        "mesh_level": summary["solver"]["mesh_level"],
+        "tolerance": summary["solver"]["tolerance"],
         "times": {f"{r:g}": interpolate_time(curve["time_s"], curve["rel_density"], r) for r in MARKS},
     }
 

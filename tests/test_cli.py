@@ -27,9 +27,9 @@ def test_run_writes_consistent_curve_summary_fields_and_plot(tmp_path: Path) -> 
     rho = np.array([float(r["rel_density"]) for r in rows])
     s = json.loads((out / "summary.json").read_text())
     for key in ("rho0", "final_density", "times_to_density_s", "wall_seconds", "steps",
-                "newton_iterations", "degrees_of_freedom", "mesh_level", "tolerance"):
+                "newton_iterations", "degrees_of_freedom", "solver"):
         assert key in s
-    assert s["mesh_level"] == 1 and s["tolerance"] == 0.05
+    assert s["solver"]["mesh_level"] == 1 and s["solver"]["tolerance"] == 0.05
     assert s["steps"] == len(rows) - 1
     assert s["final_density"] == pytest.approx(rho[-1], rel=1e-12)
     assert s["rho0"] == pytest.approx(rho[0], rel=1e-12)

@@ -122,7 +122,7 @@ def test_accuracy_climbs_the_ladder_until_the_estimate_is_within_it(
     assert search is not None and search["reached"] is True
     assert [r["mesh_level"] for r in search["rungs"]] == [1, 2]
     s = json.loads((tmp_path / "loose" / "summary.json").read_text())
-    assert (s["mesh_level"], s["tolerance"], s["element"]) == (2, 0.04, "hex8")
+    assert (s["solver"]["mesh_level"], s["solver"]["tolerance"], s["solver"]["element"]) == (2, 0.04, "hex8")
     # The streamed companion is the rung below (level 1 at tolerance 0.08):
     # the summary's estimate is the one the two files give.
     again = estimate_error(

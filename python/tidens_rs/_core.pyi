@@ -237,6 +237,9 @@ class Simulation:
     ) -> Simulation: ...
     def checkpoint(self) -> bytes:
         """The run's state as bytes (give them back as resume_from)."""
+    def set_density_targets(self, targets: list[float]) -> None:
+        """Densities that steps end on (just past each), as they end on
+        until_density; not recorded in a checkpoint."""
     def advance(self) -> dict[str, float]:
         """One converged step (GIL released); returns its curve point.
 

@@ -10,7 +10,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from . import _checks, _core, cells, io
 from ._core import CONTACT_FACETS, CONTACT_MODES, ELEMENTS, SOLVER_DEFAULTS, Cell, ConvergenceError, Material
@@ -18,6 +18,8 @@ from .estimate import COMPANION_TOLERANCE_FACTOR, ErrorEstimate, estimate_error
 from .result import MARK_DENSITIES, Result
 from .signals import Terminated
 from .snapshot import Snapshot
+
+T = TypeVar("T")
 
 # Curve columns the error estimate reads.
 ESTIMATE_COLUMNS = ("time_s", "rel_density", "time_error_s")
@@ -27,6 +29,10 @@ RUN_FILE = "run.json"
 CHECKPOINT_FILE = "checkpoint.bin"
 # The state at a stop between two checkpoints (see resume's from_last_step).
 STOP_CHECKPOINT_FILE = "checkpoint_stop.bin"
+# A snapshot of density r is taken at the first step past r - this: steps
+# aimed at r end within Newton's and the contact's noise in the density
+# around it, sometimes just short (the rate falls during the step).
+SNAPSHOT_DENSITY_SLACK = 5e-4
 # Steps between checkpoints when SolverSettings.checkpoint_every is 0.
 CHECKPOINT_INTERVAL = 50
 
@@ -173,6 +179,11 @@ class SolverSettings:
             "checkpoint_every": c.integer("checkpoint_every", self.checkpoint_every),
         }
         _core.check_parameters(**fixed)
+        if fixed["element"] == "tet10" and fixed["contact_facets"] != SOLVER_DEFAULTS["contact_facets"]:
+            raise ValueError(
+                f"contact_facets = {fixed['contact_facets']!r}: applies to hex8 elements only "
+                "(tet10 particles touch on the flat corner triangles of their faces)"
+            )
         for name, value in fixed.items():
             object.__setattr__(self, name, value)
 
@@ -229,6 +240,10 @@ class Case:
         }
         _core.check_parameters(**fixed, material=self.material)
         if self.cell.is_periodic:
+            if fixed["tied_planes"]:
+                raise ValueError(
+                    f"tied_planes = True: cell {self.cell.name!r} is periodic, with no die plane to tie particles to"
+                )
             _check_load_bearing(self.cell)
         for name, value in fixed.items():
             object.__setattr__(self, name, value)
@@ -243,7 +258,7 @@ class Case:
         """The native simulation object of this case (advance it yourself);
         with ``resume_from`` (a checkpoint's bytes), it goes on from there."""
         s = self.solver
-        return _core.Simulation(
+        return _interruptible(lambda: _core.Simulation(
             self.cell,
             self.material,
             stress_mpa=self.stress_mpa,
@@ -270,7 +285,7 @@ class Case:
             contact_facets=s.contact_facets,
             checkpoint_every=s.checkpoint_every,
             resume_from=resume_from,
-        )
+        ))
 
     def as_dict(self) -> dict[str, Any]:
         """The case as plain data (``Case.from_dict`` rebuilds it)."""
@@ -328,8 +343,11 @@ class Case:
         of an earlier run in it (and only those). A file that cannot be
         written raises :class:`tidens_rs.OutputError` naming it, with the
         result in its ``result`` attribute; what was written stays. Snapshots are taken at the first step
-        reaching each of ``snapshot_densities``, exactly at
-        ``snapshot_times_s``, and at the end. ``callback(point)`` is called
+        reaching each of ``snapshot_densities`` (steps end just past each, as
+        on ``until_density``), exactly at ``snapshot_times_s``, and at the
+        end. While it writes, the run holds a lock on ``out_dir``: another run
+        started into it meanwhile raises :class:`tidens_rs.io.FolderBusyError`
+        (a FileExistsError) naming this one's process id. ``callback(point)`` is called
         after every converged step with the curve point; returning False stops
         the run. ``progress`` shows a progress bar on stderr.
 
@@ -377,20 +395,51 @@ class Case:
                 raise ValueError(f"accuracy = {accuracy!r}: must be in [{MIN_ACCURACY:g}, {MAX_ACCURACY:g}] (a relative error of t(rho))")
             if not error_estimate:
                 raise ValueError("accuracy needs the error estimate: error_estimate=False excludes it")
-            return self._run_to_accuracy(
-                float(accuracy),
-                until_density,
-                until_time_s,
-                out,
+            with io.locked(out):
+                if out is not None:
+                    io.check_output_dir(out, clear)  # again, now that no other run can start
+                return self._run_to_accuracy(
+                    float(accuracy),
+                    until_density,
+                    until_time_s,
+                    out,
+                    snapshot_densities=snapshot_densities,
+                    snapshot_times_s=snapshot_times_s,
+                    progress=progress,
+                    callback=callback,
+                    clear_outputs=clear,
+                )
+        # Built first: bad input (an overlapping cell) fails before any file.
+        sim = self.simulation(until_density, until_time_s, snapshot_times_s)
+        with io.locked(out):
+            return self._run_locked(
+                sim, until_density, until_time_s, out, clear,
                 snapshot_densities=snapshot_densities,
                 snapshot_times_s=snapshot_times_s,
                 progress=progress,
                 callback=callback,
-                clear_outputs=clear,
+                error_estimate=error_estimate,
             )
-        # Built first: bad input (an overlapping cell) fails before any file.
-        sim = self.simulation(until_density, until_time_s, snapshot_times_s)
+
+    def _run_locked(
+        self,
+        sim: _core.Simulation,
+        until_density: float | None,
+        until_time_s: float | None,
+        out: Path | None,
+        clear: bool,
+        *,
+        snapshot_densities: Sequence[float],
+        snapshot_times_s: Sequence[float],
+        progress: bool,
+        callback: ProgressCallback | None,
+        error_estimate: bool,
+    ) -> Result:
+        """:meth:`run` on its simulation ``sim``, holding the lock of ``out``."""
         if out is not None:
+            # Again, now that no other run can start: one that ended since the
+            # first check has left its outputs.
+            io.check_output_dir(out, clear)
             if clear:
                 io.clear_outputs(out)
             io.write_json(
@@ -423,8 +472,8 @@ class Case:
             why = f"the run ended with status {result.status}"
         elif not error_estimate:
             why = "not asked for (error_estimate=False)"
-        result.error_estimate = self._estimate(result, until_density, until_time_s, out, progress, why)
-        return _finish(result, error, out)
+        result.error_estimate, stopped = self._estimate(result, until_density, until_time_s, out, progress, why)
+        return _finish(result, error or stopped, out)
 
     def _check_stop(self, until_density: Any, until_time_s: Any) -> tuple[float | None, float | None]:
         """The stop condition, checked: a density in (rho0, 1), a time > 0."""
@@ -485,9 +534,9 @@ class Case:
             done = error is not None or result.status not in FINISHED
             if done:
                 why = f"the run ended with status {result.status}"
-                result.error_estimate = rung._estimate(result, None, None, None, False, why)
+                result.error_estimate = rung._estimate(result, None, None, None, False, why)[0]
             elif previous is None:
-                result.error_estimate = rung._estimate(result, None, None, None, False, None)
+                result.error_estimate = rung._estimate(result, None, None, None, False, None)[0]
             else:
                 result.error_estimate = _estimate_with(result, previous, None)
             worst = result.error_estimate.curve["relative"]
@@ -539,9 +588,11 @@ class Case:
         if clear_outputs and curve_path is not None:
             io.clear_outputs(curve_path.parent)
         every = self.solver.checkpoint_every or CHECKPOINT_INTERVAL
-        writer = io.CurveWriter(curve_path) if curve_path is not None else None
+        writer = io.CurveWriter(curve_path, io.curve_columns(self.cell.is_periodic)) if curve_path is not None else None
         # A resumed run has passed some of them already.
         pending_rho = sorted(r for r in snapshot_densities if r > sim.rel_density)
+        # Steps end on them, so that each snapshot is taken at its density.
+        sim.set_density_targets(pending_rho)
         pending_t = sorted(t for t in snapshot_times_s if t > sim.time_s * (1 + 1e-9))
         snapshots: list[Snapshot] = []
         bar = _progress_bar(sim.rel_density, until_density, until_time_s) if progress else None
@@ -567,7 +618,7 @@ class Case:
                     io.atomic_write(checkpoint_path, lambda tmp: tmp.write_bytes(sim.checkpoint()))
                     # An earlier stop's state is behind this one now.
                     _unlink(checkpoint_path.with_name(STOP_CHECKPOINT_FILE))
-                while pending_rho and p["rel_density"] >= pending_rho[0]:
+                while pending_rho and p["rel_density"] >= pending_rho[0] - SNAPSHOT_DENSITY_SLACK:
                     snapshots.append(_snapshot(sim, f"rho{pending_rho.pop(0):.3f}", p))
                 while pending_t and p["time_s"] >= pending_t[0] * (1 - 1e-9):
                     snapshots.append(_snapshot(sim, f"t{pending_t.pop(0):g}s", p))
@@ -585,7 +636,10 @@ class Case:
             message = str(e) if isinstance(e, Terminated) else "interrupted by the user"
         except io.OutputError as e:
             status, message, error = "output_failed", str(e), e
-        curve = sim.curve()
+        # The columns of the cell's curve file (no coordination number for
+        # cells of octants), so that a result and its loaded copy agree.
+        columns = io.curve_columns(self.cell.is_periodic)
+        curve = {k: v for k, v in sim.curve().items() if k in columns}
         if writer is not None:
             error = _complete_curve(writer, curve, error)
         # Whatever stopped the run, it can go on from here. With
@@ -631,15 +685,18 @@ class Case:
         out: Path | None,
         progress: bool,
         why_not: str | None,
-    ) -> ErrorEstimate:
+    ) -> tuple[ErrorEstimate, KeyboardInterrupt | None]:
         """The error estimate of ``result``; runs the coarse companion unless
-        ``why_not`` says why not, or the level is the coarsest."""
+        ``why_not`` says why not, or the level is the coarsest. Second: the
+        Ctrl-C or SIGTERM that stopped the companion, for the caller to raise
+        once the result is written (the estimate then says it was
+        interrupted)."""
         level = self.solver.mesh_level
         arrays = {k: result.curve[k] for k in ESTIMATE_COLUMNS}
         if why_not is None and level <= 1:
             why_not = f"mesh level {level} is the coarsest: there is no coarser companion"
         if why_not is not None:
-            return estimate_error(arrays, None, MARK_DENSITIES, level=level, companion_note=why_not)
+            return estimate_error(arrays, None, MARK_DENSITIES, level=level, companion_note=why_not), None
         tolerance = companion_tolerance(self.solver.tolerance)
         companion = replace(self, solver=replace(self.solver, mesh_level=level - 1, tolerance=tolerance))
         if progress:
@@ -651,8 +708,36 @@ class Case:
             progress=progress,
             fields=False,
         )
-        return _estimate_with(result, other, error)
+        stopped = error if isinstance(error, KeyboardInterrupt) else None
+        return _estimate_with(result, other, error), stopped
 
+
+def _interruptible(call: Callable[[], T]) -> T:
+    """``call()`` (a native call that releases the GIL but does not look
+    at signals, such as meshing a cell of many particles) in a thread of its
+    own, while this one waits in short slices: Ctrl-C or SIGTERM raises here
+    within a tenth of a second. The abandoned call finishes in the
+    background, its result dropped."""
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return call()  # signal handlers run in the main thread only
+    box: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            box["value"] = call()
+        except BaseException as e:  # handed to the waiting thread
+            box["error"] = e
+
+    worker = threading.Thread(target=target, name="tidens-native", daemon=True)
+    worker.start()
+    while worker.is_alive():
+        worker.join(0.1)
+    if "error" in box:
+        raise box["error"]
+    value: T = box["value"]
+    return value
 
 
 def _check_load_bearing(cell: Cell) -> None:
@@ -727,6 +812,21 @@ def resume(
         raise FileNotFoundError(
             f"{out}: no run to resume ({' and '.join(missing)} missing): a run writes them when it has an output folder"
         )
+    if not isinstance(from_last_step, bool):
+        raise TypeError(f"from_last_step = {from_last_step!r}: must be True or False")
+    with io.FolderLock(out):
+        return _resume_locked(out, progress, callback, checkpoint_every, from_last_step)
+
+
+def _resume_locked(
+    out: Path,
+    progress: bool,
+    callback: ProgressCallback | None,
+    checkpoint_every: int | None,
+    from_last_step: bool,
+) -> Result:
+    """:func:`resume`, holding the lock of ``out``."""
+    run_file, checkpoint = out / RUN_FILE, out / CHECKPOINT_FILE
     try:
         data = json.loads(run_file.read_text())
         case = Case.from_dict(data["case"])
@@ -734,15 +834,16 @@ def resume(
         until_density, until_time_s = args["until_density"], args["until_time_s"]
     except (ValueError, TypeError, KeyError) as e:
         raise ValueError(f"{run_file}: not the record of a run ({type(e).__name__}: {e})") from e
-    if not isinstance(from_last_step, bool):
-        raise TypeError(f"from_last_step = {from_last_step!r}: must be True or False")
     interval_changed = checkpoint_every is not None and checkpoint_every != case.solver.checkpoint_every
     if checkpoint_every is not None:
         case = replace(case, solver=replace(case.solver, checkpoint_every=checkpoint_every))
     earlier = [(t, name) for t, name in io.read_pvd(out / "fields.pvd") if name != "fields_final.vtu"]
     stop = out / STOP_CHECKPOINT_FILE
     start = stop if from_last_step and stop.exists() else checkpoint
-    sim = case.simulation(until_density, until_time_s, args["snapshot_times_s"], resume_from=start.read_bytes())
+    try:
+        sim = case.simulation(until_density, until_time_s, args["snapshot_times_s"], resume_from=start.read_bytes())
+    except ValueError as e:
+        raise ValueError(f"{start}: {e}") from e
     if interval_changed:
         io.write_json(run_file, {**data, "case": case.as_dict()})
     result, error = case._press(
@@ -762,8 +863,8 @@ def resume(
         why = f"the run ended with status {result.status}"
     elif not args["error_estimate"]:
         why = "not asked for (error_estimate=False)"
-    result.error_estimate = case._estimate(result, until_density, until_time_s, out, progress, why)
-    return _finish(result, error, out)
+    result.error_estimate, stopped = case._estimate(result, until_density, until_time_s, out, progress, why)
+    return _finish(result, error or stopped, out)
 
 
 def load(out_dir: str | Path) -> Result:
@@ -787,10 +888,10 @@ def load(out_dir: str | Path) -> Result:
     missing = [p.name for p in files if not p.exists()]
     if missing:
         raise FileNotFoundError(f"{out}: no run to load ({' and '.join(missing)} missing)")
+    case = _read_case(files[0])
+    curve = _read_curve(files[1])
+    summary = _read_json_object(files[2])
     try:
-        case = Case.from_dict(json.loads(files[0].read_text())["case"])
-        curve = io.read_curve(files[1])
-        summary = json.loads(files[2].read_text())
         estimate = summary.get("error_estimate")
         result = Result(
             case=case,
@@ -805,23 +906,67 @@ def load(out_dir: str | Path) -> Result:
             error_estimate=ErrorEstimate(**estimate) if isinstance(estimate, dict) else None,
             accuracy_search=summary.get("accuracy"),
         )
+        steps, density = int(summary["steps"]), float(summary["final_density"])
     except (ValueError, TypeError, KeyError) as e:
-        raise ValueError(f"{out}: not the outputs of a run ({type(e).__name__}: {e})") from e
+        raise ValueError(f"{files[2]}: not the summary of a run ({type(e).__name__}: {e})") from e
+    last_step, last_density = int(curve["step"][-1]), float(curve["rel_density"][-1])
+    if last_step != steps or abs(last_density - density) > 1e-12 * max(1.0, abs(density)):
+        raise ValueError(
+            f"{files[1]} does not match {files[2].name}: the curve ends at step {last_step} (rho = {last_density:.4f}), "
+            f"the summary at step {steps} (rho = {density:.4f}); the curve file was cut or changed after the run"
+        )
     return result
+
+
+def _read_json_object(path: Path) -> dict[str, Any]:
+    """The JSON object in ``path``; ValueError naming the file otherwise."""
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        raise ValueError(f"{path}: cannot be read as JSON ({e})") from e
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: not a run's file (a JSON {type(data).__name__}, expected an object)")
+    return data
+
+
+def _read_case(path: Path) -> Case:
+    """The case recorded in a run's ``run.json``; ValueError naming the file."""
+    data = _read_json_object(path)
+    try:
+        return Case.from_dict(data["case"])
+    except (ValueError, TypeError, KeyError, AttributeError) as e:
+        raise ValueError(f"{path}: not the record of a run ({type(e).__name__}: {e})") from e
+
+
+def _read_curve(path: Path) -> dict[str, Any]:
+    """A run's curve file; ValueError naming the file when it is not one."""
+    try:
+        curve = io.read_curve(path)
+    except (OSError, UnicodeDecodeError, ValueError) as e:
+        raise ValueError(f"{path}: cannot be read as a curve ({e})") from e
+    missing = [c for c in ("time_s", "rel_density", "step") if c not in curve]
+    if missing or len(curve["time_s"]) == 0:
+        raise ValueError(f"{path}: not a run's curve (no rows, or no column {', '.join(missing) or 'time_s'})")
+    return curve
 
 
 def _load_unfinished(out: Path) -> Result:
     """The run in ``out`` that wrote no summary (see :func:`load`)."""
+    record = out / RUN_FILE
+    data = _read_json_object(record)
+    case = _read_case(record)
+    curve = _read_curve(out / "curve.csv")
     try:
-        data = json.loads((out / RUN_FILE).read_text())
-        case = Case.from_dict(data["case"])
         args = data["run"]
-        curve = io.read_curve(out / "curve.csv")
-        checkpoint = out / CHECKPOINT_FILE
-        saved = checkpoint.read_bytes() if checkpoint.exists() else None
-        sim = case.simulation(args["until_density"], args["until_time_s"], args["snapshot_times_s"], resume_from=saved)
-    except (ValueError, TypeError, KeyError) as e:
-        raise ValueError(f"{out}: not the outputs of a run ({type(e).__name__}: {e})") from e
+        until = (args["until_density"], args["until_time_s"], args["snapshot_times_s"])
+    except (TypeError, KeyError) as e:
+        raise ValueError(f"{record}: not the record of a run ({type(e).__name__}: {e})") from e
+    checkpoint = out / CHECKPOINT_FILE
+    saved = checkpoint.read_bytes() if checkpoint.exists() else None
+    try:
+        sim = case.simulation(*until, resume_from=saved)
+    except ValueError as e:
+        raise ValueError(f"{checkpoint}: {e}") from e
     steps = len(curve["time_s"]) - 1
     at = f"its last checkpoint (step {len(sim.curve()['time_s']) - 1})" if saved is not None else "its start (no checkpoint)"
     return Result(
@@ -917,11 +1062,18 @@ def _snapshot(sim: _core.Simulation, label: str, point: dict[str, float]) -> Sna
 def _progress_bar(
     rho0: float, until_density: float | None, until_time_s: float | None
 ) -> Callable[[dict[str, float] | None], None]:
-    """A tqdm bar on stderr showing the fraction done (by density or time)."""
+    """A tqdm bar on stderr: the per cent done (of the way from rho0 to the
+    target density, or of the time), the density and time reached."""
     from tqdm import tqdm
 
-    total = 1000
-    bar = tqdm(total=total, unit="‰", file=None, dynamic_ncols=True, leave=True)
+    target = f"{until_density:g}" if until_density is not None else f"t = {until_time_s:g} s"
+    bar = tqdm(
+        total=100.0,
+        file=None,
+        dynamic_ncols=True,
+        leave=True,
+        bar_format="{percentage:3.0f} %|{bar}| {desc} [{elapsed}, {remaining} left]",
+    )
 
     def update(p: dict[str, float] | None) -> None:
         if p is None:
@@ -932,10 +1084,8 @@ def _progress_bar(
             frac = (p["rel_density"] - rho0) / (until_density - rho0)
         if until_time_s is not None:
             frac = max(frac, p["time_s"] / until_time_s)
-        bar.n = int(total * min(max(frac, 0.0), 1.0))
-        bar.set_postfix_str(
-            f"t={p['time_s']:.3g} s rho={p['rel_density']:.4f} step={int(p['step'])}", refresh=False
-        )
+        bar.n = round(100.0 * min(max(frac, 0.0), 1.0), 2)
+        bar.set_description_str(f"rho {p['rel_density']:.4f} of {target}, t = {p['time_s']:.4g} s, step {int(p['step'])}", refresh=False)
         bar.refresh()
 
     return update

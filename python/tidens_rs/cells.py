@@ -73,6 +73,7 @@ from typing import Any
 
 import numpy as np
 
+from . import _checks
 from ._core import DEFAULT_SIZE_RATIO, Cell, Packing
 
 DEFAULT_RADIUS_MM = 0.05
@@ -93,21 +94,21 @@ Particle = tuple[tuple[float, float, float], float, float, tuple[float, float, f
 def sc(radius_mm: float = DEFAULT_RADIUS_MM, aspect_ratio: float = 1.0) -> Cell:
     """Simple cubic: one spheroid octant (semi-axes a, a, c = aspect_ratio a)
     in an a x a x c box; rho0 = pi/6 for any aspect ratio."""
-    return Cell.sc(radius_mm, aspect_ratio)
+    return Cell.sc(*_sizes(radius_mm=radius_mm, aspect_ratio=aspect_ratio))
 
 
 def bcc(radius_mm: float = DEFAULT_RADIUS_MM, aspect_ratio: float = 1.0) -> Cell:
     """Body-centred cubic: box s x s x (aspect_ratio s), s = 2R/sqrt(3), with
     octants at (0,0,0) and (s,s,s) touching along the body diagonal;
     rho0 = pi sqrt(3)/8 = 0.6802."""
-    return Cell.bcc(radius_mm, aspect_ratio)
+    return Cell.bcc(*_sizes(radius_mm=radius_mm, aspect_ratio=aspect_ratio))
 
 
 def fcc(radius_mm: float = DEFAULT_RADIUS_MM, aspect_ratio: float = 1.0) -> Cell:
     """Face-centred cubic: box s x s x (aspect_ratio s), s = sqrt(2) R, with
     octants at (0,0,0), (s,s,0), (s,0,s), (0,s,s) touching along the face
     diagonals; rho0 = pi/(3 sqrt(2)) = 0.7405."""
-    return Cell.fcc(radius_mm, aspect_ratio)
+    return Cell.fcc(*_sizes(radius_mm=radius_mm, aspect_ratio=aspect_ratio))
 
 
 def sc2(
@@ -121,7 +122,13 @@ def sc2(
     eight corners of a box of edge R + R/r; rho0 = (2 pi/3)(1 + r^3)/(1 + r)^3
     = 0.60002 at r = 1.566. Above 1 + sqrt(2) the large particles would overlap
     across the face diagonals, so such a ratio is a ValueError."""
-    return Cell.sc2(radius_mm, size_ratio, aspect_ratio)
+    return Cell.sc2(*_sizes(radius_mm=radius_mm, size_ratio=size_ratio, aspect_ratio=aspect_ratio))
+
+
+def _sizes(**sizes: Any) -> list[float]:
+    """The arguments' values, in order, each a finite real number
+    (TypeError or ValueError naming it otherwise; the core checks ranges)."""
+    return [_checks.real(name, value) for name, value in sizes.items()]
 
 
 def custom(name: str, lengths_mm: Sequence[float], octants: Sequence[Sequence[Any]]) -> Cell:
@@ -223,6 +230,12 @@ def random(
     ``small_fraction``, the small particles' share of the number) makes it
     bimodal. The same arguments give the same packing. See
     ``Packing.generate`` for the ranges (ValueError naming the argument)."""
+    _sizes(radius_mm=radius_mm, aspect_ratio=aspect_ratio, small_fraction=small_fraction)
+    if isinstance(particles, int) and not isinstance(particles, bool) and particles == 1:
+        raise ValueError(
+            "particles = 1: must be in [2, 10000] (one particle in a periodic box touches only its own images, "
+            "and jams only where it fills the box's width)"
+        )
     pack = Packing.generate(
         particles,
         rho0=0.74 if rho0 is None else rho0,

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import json
 import math
 import re
 import sys
@@ -24,8 +25,8 @@ from typing import Any, NoReturn
 
 from . import cells, continuum, materials, sweep
 from ._core import CONTACT_FACETS, CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, Packing, TidensError, UnsupportedError, __version__
-from .case import DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, FINISHED, STOP_CHECKPOINT_FILE, Case, SolverSettings, load, resume
-from .io import check_output_dir
+from .case import CHECKPOINT_FILE, DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, FINISHED, RUN_FILE, STOP_CHECKPOINT_FILE, Case, SolverSettings, load, resume
+from .io import FolderLock, check_output_dir
 from .result import MARK_DENSITIES, Result
 from .signals import EXIT_TERMINATED, Terminated, sigterm_stops
 
@@ -64,8 +65,10 @@ _OPTION_OF = {
     "packing_seed": "--packing-seed",
     "contact": "--contact",
     "contact_facets": "--contact-facets",
+    "tied_planes": "--tied-planes",
     "out_dir": "--out",
     "checkpoint_every": "--checkpoint-every",
+    "points": "--points",
     "young_mpa/stress": "--E/(--knockdown x --stress)",
 }
 _NAMED = re.compile(
@@ -114,12 +117,34 @@ def _float_list(text: str) -> list[float]:
         raise argparse.ArgumentTypeError(f"{text!r}: expected comma-separated numbers") from e
 
 
+def _some_floats(text: str) -> list[float]:
+    """One number or more, comma-separated (a swept list cannot be empty)."""
+    values = _float_list(text)
+    if not values:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected one or more comma-separated numbers")
+    return values
+
+
+# The seeds the packing generator takes (64-bit).
+_MAX_SEED = 2**64 - 1
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a whole number in [0, 2^64 - 1]") from None
+    if not 0 <= value <= _MAX_SEED:
+        raise argparse.ArgumentTypeError(f"{value}: must be in [0, 2^64 - 1 = {_MAX_SEED}]")
+    return value
+
+
 def _add_run_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("cell")
     g.add_argument("--cell", choices=(*cells.CELL_NAMES, "random"), help="packing (default sc): sc, bcc, fcc, sc2 (rock salt of two sizes), or random (a random jammed packing of whole particles in a periodic cube, see --particles)")
     g.add_argument("--periodic", action="store_true", help="the lattice of --cell as whole particles in a periodic box twice the cell's size (sc: one sphere; bcc two, fcc four, sc2 eight), instead of the cell of octants between mirror planes")
-    g.add_argument("--particles", type=int, help="--cell random: number of particles, in [1, 10000] (default 16)")
-    g.add_argument("--packing-seed", type=int, help="--cell random: seed of the packing, >= 0 (default 0): the same options and seed give the same packing")
+    g.add_argument("--particles", type=int, help="--cell random: number of particles, in [2, 10000] (default 16)")
+    g.add_argument("--packing-seed", type=_seed, help="--cell random: seed of the packing, in [0, 2^64 - 1] (default 0): the same options and seed give the same packing")
     g.add_argument("--rho0", type=float, help="--cell random: grow the packing toward this relative density and stop where it jams below it (default: where it first jams, about 0.60-0.65 for 32 or more spheres of one size)")
     g.add_argument("--small-fraction", type=float, help="--cell random with --size-ratio: number fraction of the small particles, in [0, 1] (default 0.5)")
     g.add_argument("--cell-file", type=Path, metavar="PATH", help="a cell described in a JSON or TOML file, instead of --cell (schema: python -c 'import tidens_rs.cells as c; help(c)')")
@@ -201,8 +226,6 @@ def _cell(args: argparse.Namespace) -> Cell:
     radius = args.radius if args.radius is not None else cells.DEFAULT_RADIUS_MM
     aspect = args.aspect_ratio if args.aspect_ratio is not None else 1.0
     if name == "random":
-        if args.packing_seed is not None and args.packing_seed < 0:
-            raise ValueError(f"--packing-seed = {args.packing_seed}: must be >= 0")
         if args.periodic:
             raise ValueError("--periodic does not apply to --cell random: it is periodic already")
         if args.small_fraction is not None and args.size_ratio is None:
@@ -278,7 +301,7 @@ def _report(result: Result) -> None:
     upto = f" to step {counted}" if counted < s["steps"] else ""
     print(
         f"wall {s['wall_seconds']:.1f} s{upto}" + ("" if companion is None else f" (+ {companion:.1f} s for the companion)") + f", {s['steps']} steps, {s['newton_iterations']} Newton iterations, "
-        f"{s['degrees_of_freedom']} dofs (mesh level {s['mesh_level']}, tolerance {s['tolerance']:g})"
+        f"{s['degrees_of_freedom']} dofs (mesh level {s['solver']['mesh_level']}, tolerance {s['solver']['tolerance']:g})"
     )
 
 
@@ -402,7 +425,7 @@ def _add_continuum_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--ramp-time", type=float, default=0.0, help="linear ramp of the stress [s] (default 0: the stress acts in full from t = 0)")
     g = p.add_argument_group("output")
     g.add_argument("--until-density", type=float, required=True, help="end of the curve, a relative density in (rho0, 1)")
-    g.add_argument("--points", type=int, default=200, help="rows of the curve (default 200)")
+    g.add_argument("--points", type=int, default=200, help=f"rows of the curve, in [2, {continuum.MAX_CURVE_POINTS}] (default 200)")
     g.add_argument("--out", type=_folder, required=True, help="output folder, new or empty (see --overwrite)")
     g.add_argument("--overwrite", action="store_true", help="replace an earlier curve.csv in --out")
 
@@ -416,9 +439,13 @@ def _continuum(args: argparse.Namespace) -> int:
     if not (0.0 < rho0 < continuum.STAGE_SWITCH):
         raise ValueError(f"--rho0 = {rho0}: must be in (0, {continuum.STAGE_SWITCH:g})")
     model = continuum.for_material(law, args.stress, rho0, knockdown=args.knockdown, ramp_time_s=args.ramp_time)
+    if not 2 <= args.points <= continuum.MAX_CURVE_POINTS:
+        raise ValueError(f"--points = {args.points}: must be in [2, {continuum.MAX_CURVE_POINTS}]")
     out: Path = args.out
     check_output_dir(out, args.overwrite)
-    path = continuum.write_curve(model, args.until_density, out / "curve.csv", args.points)
+    with FolderLock(out):
+        check_output_dir(out, args.overwrite)
+        path = continuum.write_curve(model, args.until_density, out / "curve.csv", args.points)
     marks = [r for r in MARK_DENSITIES if rho0 < r <= args.until_density]
     times = [float(t) for t in model.time_to_density(marks)] if marks else []
     print(f"continuum model (Eqs. 2 and 3 of the paper), C = {law.creep_c:.4g} MPa^-n s^-1, n = {law.creep_n:g}, "
@@ -442,10 +469,10 @@ def _name_list(choices: Sequence[str]) -> Callable[[str], list[str]]:
 
 def _add_sweep_options(p: argparse.ArgumentParser) -> None:
     g = p.add_argument_group("what is swept (comma-separated lists; every combination is a point)")
-    g.add_argument("--stress", type=_float_list, required=True, help="applied piston stresses sigma [MPa], e.g. 5,10,15")
+    g.add_argument("--stress", type=_some_floats, required=True, help="applied piston stresses sigma [MPa], e.g. 5,10,15")
     g.add_argument("--material", type=_name_list(materials.PRESET_NAMES), default=["ti64-creep-1293k"], help="material presets (default ti64-creep-1293k)")
     g.add_argument("--cell", type=_name_list(cells.CELL_NAMES), default=["sc"], help="packings (default sc)")
-    g.add_argument("--aspect-ratio", type=_float_list, default=[1.0], help="spheroid c/a, c along the load (default 1)")
+    g.add_argument("--aspect-ratio", type=_some_floats, default=[1.0], help="spheroid c/a, c along the load (default 1)")
     g = p.add_argument_group("the rest of each case")
     g.add_argument("--knockdown", type=float, default=_CASE_DEFAULTS["knockdown"], help=f"die-wall knock-down factor f (default {_CASE_DEFAULTS['knockdown']:g})")
     g.add_argument("--ramp-time", type=float, default=_CASE_DEFAULTS["ramp_time_s"], help=f"linear ramp of the stress [s] (default {_CASE_DEFAULTS['ramp_time_s']:g})")
@@ -537,7 +564,7 @@ def _add_pack_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--small-fraction", type=float, default=0.5, help="bimodal: number fraction of small particles, in [0, 1] (default 0.5)")
     p.add_argument("--sigma", type=float, help="lognormal: standard deviation of ln(radius), in (0, 1]")
     p.add_argument("--boundary", choices=("periodic", "die"), default="periodic", help="periodic in x, y and z (default), or a die: periodic in x and y, walls at z = 0 and Lz")
-    p.add_argument("--packing-seed", type=int, default=0, help="seed: the same options and seed give the same packing (default 0)")
+    p.add_argument("--packing-seed", type=_seed, default=0, help="seed, in [0, 2^64 - 1]: the same options and seed give the same packing (default 0)")
     p.add_argument("--out", type=Path, required=True, help="packing file to write (one particle per line, box and boundary in its header)")
 
 
@@ -561,8 +588,6 @@ def _pack(args: argparse.Namespace) -> int:
 
     from . import packing
 
-    if args.packing_seed < 0:
-        raise ValueError(f"packing_seed = {args.packing_seed}: must be >= 0")
     t0 = time.perf_counter()
     try:
         p = _generate(args)
@@ -629,26 +654,102 @@ def _show(args: argparse.Namespace) -> int:
     return 0
 
 
+# Each command: its one-line help (in `tidens --help`) and the description
+# its own help page starts with.
+_COMMANDS = {
+    "run": (
+        "press one cell and write curve, summary, fields and a plot",
+        "Presses one cell (a preset, --cell, or a cell file, --cell-file) in the rigid die until a density or a time, "
+        "and writes DIR/curve.csv (row by row as the run goes), DIR/summary.json, VTU fields (DIR/fields.pvd) and "
+        "DIR/density.png; with the error estimate (a coarse companion run) unless --no-error-estimate. "
+        "--resume DIR goes on with a stopped run.",
+    ),
+    "demo": (
+        "the README case: sc Ti-6Al-4V at 10 MPa to rho = 0.9, with a plot",
+        "Runs the README's case: the simple-cubic cell of Ti-6Al-4V spheres creeping at 1293 K, pressed at 10 MPa "
+        "until rho = 0.9, into --out (default ./tidens-demo): curve, summary, VTU fields and density.png. It replaces "
+        "an earlier demo's outputs there and refuses a folder that holds anything else.",
+    ),
+    "sweep": (
+        "one case over lists of stresses, materials, cells and aspect ratios, in parallel, into one folder per point and a table",
+        "Runs one case over every combination of the listed stresses, materials, cells and aspect ratios, in worker "
+        "processes (or on a Dask cluster), one folder per point under --out and the table sweep.csv (and "
+        "sweep.parquet); a second call into the same --out runs only the points not finished.",
+    ),
+    "continuum": (
+        "the closed-form continuum model's curve (Eqs. 2 and 3 of the paper) for a material, stress and rho0",
+        "Writes the closed-form continuum model's densification curve (Eqs. 2 and 3 of the paper, initial and final "
+        "stage) for a material, a stress and an initial density to DIR/curve.csv, and prints t(rho) at the marks.",
+    ),
+    "figures": (
+        "the paper's studies: run them and draw the figures with their errors, captions and the findings checked",
+        "Runs the paper's studies (as sweeps) and draws their figures with error bands, captions.md and findings.md "
+        "(each finding of the paper with a verdict and its numbers) into --out; a second call runs only what is missing.",
+    ),
+    "pack": (
+        "a random dense packing of spheres or spheroids, written to a file with its rho0 and coordination number",
+        "Generates a random dense packing of spheres or spheroids (overlap relaxation with box compression) and "
+        "writes it to a text file, one particle per line; prints its density and coordination number. "
+        "Ctrl-C or SIGTERM stops it.",
+    ),
+    "show": (
+        "a run's densities, times and costs from its folder, finished or still going (with --plot, its curve)",
+        "Reports a run from its folder as `tidens run` does at its end: finished, still going or stopped (to its last "
+        "step); or one line per run for a folder of runs. Its curve is checked against its summary.",
+    ),
+}
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = _Parser(prog="tidens", description="Powder-level FE of hot pressing of titanium powders (units: mm, N, MPa, s).")
     parser.add_argument("--version", action="version", version=f"tidens {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True)
-    run = sub.add_parser("run", help="press one cell and write curve, summary, fields and a plot")
-    _add_run_options(run)
-    demo = sub.add_parser("demo", help="the README case: sc Ti-6Al-4V at 10 MPa to rho = 0.9, with a plot")
-    demo.add_argument("--out", type=_folder, default=Path("tidens-demo"), help="output folder (default ./tidens-demo; an earlier demo's outputs there are replaced)")
-    demo.add_argument("--quiet", action="store_true", help="no progress bar")
-    sweep_parser = sub.add_parser("sweep", help="one case over lists of stresses, materials, cells and aspect ratios, in parallel, into one folder per point and a table")
-    _add_sweep_options(sweep_parser)
-    model = sub.add_parser("continuum", help="the closed-form continuum model's curve (Eqs. 2 and 3 of the paper) for a material, stress and rho0")
-    _add_continuum_options(model)
-    figures_parser = sub.add_parser("figures", help="the paper's studies: run them and draw the figures with their errors, captions and the findings checked")
-    _add_figures_options(figures_parser)
-    pack = sub.add_parser("pack", help="a random dense packing of spheres or spheroids, written to a file with its rho0 and coordination number")
-    _add_pack_options(pack)
-    show = sub.add_parser("show", help="a run's densities, times and costs from its folder, finished or still going (with --plot, its curve)")
-    _add_show_options(show)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    adders: dict[str, Callable[[argparse.ArgumentParser], None]] = {
+        "run": _add_run_options,
+        "demo": _add_demo_options,
+        "sweep": _add_sweep_options,
+        "continuum": _add_continuum_options,
+        "figures": _add_figures_options,
+        "pack": _add_pack_options,
+        "show": _add_show_options,
+    }
+    for name, (summary, description) in _COMMANDS.items():
+        adders[name](sub.add_parser(name, help=summary, description=description))
     return parser
+
+
+def _add_demo_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", type=_folder, default=Path(DEMO_FOLDER), help=f"output folder (default ./{DEMO_FOLDER}; an earlier demo's outputs there are replaced, anything else refused)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+# The demo's case, as `tidens run` options, and its default folder.
+DEMO_FOLDER = "tidens-demo"
+_DEMO_RUN = ("--cell", "sc", "--material", "ti64-creep-1293k", "--stress", "10", "--until-density", "0.9")
+
+
+def _check_demo_folder(out: Path) -> None:
+    """The demo replaces only an earlier demo: a folder holding another run
+    (or anything but a run's outputs) is refused, naming what it holds."""
+    record = out / RUN_FILE
+    if not record.exists():
+        return  # empty or new, or not a run's folder: tidens run's own check says
+    try:
+        data = json.loads(record.read_text())
+        case = Case.from_dict(data["case"])
+        until = data["run"]["until_density"]
+    except (OSError, ValueError, TypeError, KeyError, AttributeError):
+        raise FileExistsError(f"{out} holds another run ({record} is not a demo's): give another folder") from None
+    demo = Case(cell=cells.sc(), material=materials.by_name("ti64-creep-1293k"), stress_mpa=10.0)
+    same = (
+        case.cell.name == demo.cell.name and case.material == demo.material and case.stress_mpa == demo.stress_mpa
+        and until == 0.9 and case.knockdown == demo.knockdown and case.ramp_time_s == demo.ramp_time_s
+    )
+    if not same:
+        raise FileExistsError(
+            f"{out} holds another run (cell {case.cell.name}, {case.stress_mpa:g} MPa, until rho = {until}), not a demo: "
+            "the demo replaces only an earlier demo's outputs; give another folder"
+        )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -658,28 +759,30 @@ def main(argv: Sequence[str] | None = None) -> int:
     terminated (SIGTERM; partial results written, as for Ctrl-C)."""
     parser = build_parser()
     args = parser.parse_args(_glue_negative_numbers(sys.argv[1:] if argv is None else argv))
-    if args.command == "demo":
-        argv2 = [
-            "run", "--cell", "sc", "--material", "ti64-creep-1293k", "--stress", "10",
-            "--until-density", "0.9", "--out", str(args.out),
-            "--overwrite",  # the demo replaces its own earlier outputs
-        ] + (["--quiet"] if args.quiet else [])
-        args = parser.parse_args(argv2)
+    command = args.command
+    subparser = _subparser(parser, command)
     try:
         with sigterm_stops():
-            if args.command == "continuum":
+            if command == "demo":
+                _check_demo_folder(args.out)
+                # The demo replaces its own earlier outputs.
+                args = parser.parse_args(["run", *_DEMO_RUN, "--out", str(args.out), "--overwrite"] + (["--quiet"] if args.quiet else []))
+            if command == "continuum":
                 return _continuum(args)
-            if args.command == "sweep":
+            if command == "sweep":
                 return _sweep(args)
-            if args.command == "figures":
+            if command == "figures":
                 return _figures(args)
-            if args.command == "pack":
+            if command == "pack":
                 return _pack(args)
-            if args.command == "show":
+            if command == "show":
                 return _show(args)
             return _run(args)
-    except (ValueError, TypeError, FileExistsError, UnsupportedError) as e:
-        parser.error(str(e))
+    except (FileExistsError, UnsupportedError, NotADirectoryError) as e:
+        # Not a typo: the help would not help.
+        subparser.exit(2, f"{subparser.prog}: error: {option_names(str(e))}\n")
+    except (ValueError, TypeError) as e:
+        subparser.error(str(e))
     except OSError as e:
         print(f"tidens: {e}", file=sys.stderr)
         return 1
@@ -690,9 +793,22 @@ def main(argv: Sequence[str] | None = None) -> int:
         out = getattr(args, "out", None) or getattr(args, "resume", None)
         said = str(e) if isinstance(e, Terminated) else "interrupted"
         print(f"tidens: {said}" + ("" if out is None else f"; partial results in {out}"), file=sys.stderr)
-        if out is not None and (out / STOP_CHECKPOINT_FILE).exists():
-            print(f"tidens: go on with tidens run --resume {out} (from the last checkpoint, to the bit), or add --from-last-step (from the last step)", file=sys.stderr)
+        if out is not None and command in ("run", "demo") and (out / CHECKPOINT_FILE).exists():
+            hint = f"tidens: go on with tidens run --resume {out}"
+            if (out / STOP_CHECKPOINT_FILE).exists():
+                hint += " (from the last checkpoint, to the bit), or add --from-last-step (from the last step)"
+            print(hint, file=sys.stderr)
         return EXIT_TERMINATED if isinstance(e, Terminated) else 130
+
+
+def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
+    """The parser of ``command``, whose errors point to its own help."""
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            found = action.choices.get(command)
+            if isinstance(found, argparse.ArgumentParser):
+                return found
+    return parser
 
 
 if __name__ == "__main__":

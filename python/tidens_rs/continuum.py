@@ -127,6 +127,12 @@ class ContinuumModel:
         flat = np.atleast_1d(targets).ravel()
         if np.any(~np.isfinite(flat)) or np.any(flat < self.rho0) or np.any(flat >= 1.0):
             raise ValueError(f"rho must be in [rho0 = {self.rho0:.5f}, 1)")
+        if flat.size > _CHUNK:
+            # Row by row of nodes: a block of all targets at once would take
+            # targets x points floats several times over.
+            parts = [self.effective_time(flat[k : k + _CHUNK], points) for k in range(0, flat.size, _CHUNK)]
+            whole: FloatArray = np.concatenate(parts).reshape(np.shape(np.atleast_1d(targets)))
+            return whole
         u, w = _gauss_legendre(points)
         # Initial stage, rho0 to min(target, 0.9): one row of nodes per target.
         span = np.minimum(flat, STAGE_SWITCH) - self.rho0
@@ -171,6 +177,12 @@ class ContinuumModel:
         return self.time_to_density(rho), rho
 
 
+# Targets of effective_time evaluated at once (bounds its memory to a few MB).
+_CHUNK = 1024
+# The most rows write_curve writes: far more than a plot or a table needs.
+MAX_CURVE_POINTS = 100_000
+
+
 def for_material(
     material: NortonLaw,
     stress_mpa: float,
@@ -200,8 +212,10 @@ def write_curve(model: ContinuumModel, until_density: float, path: Path, points:
     returns ``path``."""
     if not (model.rho0 < until_density < 1.0):
         raise ValueError(f"until_density = {until_density}: must be in (rho0 = {model.rho0:.5f}, 1)")
-    if isinstance(points, bool) or not isinstance(points, int) or points < 2:
-        raise ValueError(f"points = {points!r}: must be an integer >= 2")
+    if isinstance(points, bool) or not isinstance(points, int):
+        raise TypeError(f"points = {points!r}: must be an integer in [2, {MAX_CURVE_POINTS}]")
+    if not 2 <= points <= MAX_CURVE_POINTS:
+        raise ValueError(f"points = {points!r}: must be an integer in [2, {MAX_CURVE_POINTS}]")
     time_s, rho = model.curve(until_density, points)
 
     def write(tmp: Path) -> None:

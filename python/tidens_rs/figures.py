@@ -361,6 +361,19 @@ def _as_found(runs: Runs, name: str, folder: Path, say: Callable[[str], None]) -
     return row
 
 
+def _check_figures_folder(out: Path, draw_only: bool) -> None:
+    """The figures' folder: a folder (new, or one of earlier figures), not a
+    file or a run's own folder; with ``draw_only`` one holding runs to draw
+    from. NotADirectoryError, FileExistsError or FileNotFoundError naming
+    it otherwise."""
+    if out.exists() and not out.is_dir():
+        raise NotADirectoryError(f"{out} is a file, not a folder: give a folder for the figures and their runs")
+    if (out / "run.json").exists():
+        raise FileExistsError(f"{out} is the folder of one run (it holds run.json): give the folder of the figures, which holds their runs in {RUNS}/")
+    if draw_only and not (out / RUNS).is_dir():
+        raise FileNotFoundError(f"{out} holds no runs to draw from (no {out / RUNS}): run tidens figures --out {out} without --draw-only first")
+
+
 def make(
     out_dir: str | Path,
     *,
@@ -396,6 +409,7 @@ def make(
         if not isinstance(flag, bool):
             raise TypeError(f"{name} = {flag!r}: must be True or False")
     out = Path(out_dir)
+    _check_figures_folder(out, draw_only)
     runs = plan(level, figures)
     jobs = sorted(runs.jobs.values(), key=_cost, reverse=True)
     if draw_only:

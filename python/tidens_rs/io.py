@@ -4,13 +4,16 @@ VTU (through meshio) with a ParaView collection (.pvd) tying them in time."""
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import fnmatch
 import json
 import math
 import os
+import sys
 from collections.abc import Callable
 from pathlib import Path
+from types import TracebackType
 from typing import IO, Any
 
 import meshio
@@ -39,6 +42,17 @@ CURVE_COLUMNS = (
 )
 
 
+
+
+def curve_columns(periodic: bool) -> tuple[str, ...]:
+    """The columns of a cell's curve file: the coordination number only for
+    periodic cells of whole particles (a cell of octants has none)."""
+    return CURVE_COLUMNS if periodic else tuple(c for c in CURVE_COLUMNS if c != "coordination_number")
+
+
+# The lock file a writing process holds in its output folder (see FolderLock).
+LOCK_FILE = ".tidens.lock"
+
 # What a run writes into its output folder (``--overwrite`` clears these and
 # nothing else); temporary files of interrupted atomic writes end in ".part".
 OUTPUT_PATTERNS = (
@@ -53,6 +67,10 @@ OUTPUT_PATTERNS = (
     "checkpoint_stop.bin",
     "*.part",
 )
+
+# Files that may lie in a folder that is otherwise new: the lock file stays
+# after its writer ends (deleting it would race with the next writer).
+_IGNORED = (LOCK_FILE,)
 
 
 # The columns that count things (written as integers).
@@ -94,13 +112,13 @@ def check_output_dir(path: Path, overwrite: bool) -> None:
     """Checks that a run may write into ``path`` (without touching it): a
     folder that does not exist yet or holds nothing; with ``overwrite``, one
     that holds nothing but an earlier run's outputs (:data:`OUTPUT_PATTERNS`).
-    Raises FileExistsError saying what is in the way."""
-    if path.exists() and not path.is_dir():
-        raise FileExistsError(f"{path} is not a folder: give a folder for the outputs")
+    Raises FileExistsError saying what is in the way, NotADirectoryError
+    when ``path`` or a folder above it is a file or a broken link."""
+    _check_folder_path(path)
     if not path.exists():
         return
     try:
-        names = sorted(p.name for p in path.iterdir())
+        names = sorted(p.name for p in path.iterdir() if p.name not in _IGNORED)
     except OSError as e:
         raise output_error(path, e) from e
     if overwrite:
@@ -112,6 +130,96 @@ def check_output_dir(path: Path, overwrite: bool) -> None:
             f"{path} holds {what} ({shown}): give an empty or new folder"
             + ("" if overwrite else ", or overwrite=True to replace an earlier run's outputs")
         )
+
+
+def _check_folder_path(path: Path) -> None:
+    """NotADirectoryError, in one line, when ``path`` cannot be a folder: it
+    is a file, a broken symbolic link, or a folder above it is a file."""
+    if path.is_symlink() and not path.exists():
+        raise NotADirectoryError(f"{path} is a symbolic link to {os.readlink(path)}, which does not exist: give a folder")
+    if path.exists() and not path.is_dir():
+        raise NotADirectoryError(f"{path} is a file, not a folder: give a folder for the outputs")
+    for parent in path.absolute().parents:
+        if parent.is_symlink() and not parent.exists():
+            raise NotADirectoryError(f"{parent} (in {path}) is a symbolic link to {os.readlink(parent)}, which does not exist")
+        if parent.exists():
+            if not parent.is_dir():
+                raise NotADirectoryError(f"{parent} (in {path}) is a file, not a folder")
+            return
+
+
+class FolderBusyError(FileExistsError):
+    """Another process is writing into the output folder (it holds its lock)."""
+
+
+def locked(folder: Path | None) -> contextlib.AbstractContextManager[object]:
+    """The :class:`FolderLock` of ``folder``, or nothing when there is none."""
+    return contextlib.nullcontext() if folder is None else FolderLock(folder)
+
+
+class FolderLock:
+    """An exclusive lock on an output folder, held by the process that
+    writes into it from the check of the folder to the last file written.
+
+    Two runs started together into one folder would both find it empty and
+    interleave their rows; the lock (``flock`` on ``DIR/.tidens.lock``,
+    released by the kernel when the process ends, however it ends) lets
+    only one of them in. The second raises :class:`FolderBusyError` naming
+    the holder's process id. The lock is advisory: it keeps out other
+    tidens runs, resumes and sweeps, not other programs. Creates the folder
+    (and those above it) when it does not exist. A context manager."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        self._fd: int | None = None
+        self._created = False
+
+    def acquire(self) -> FolderLock:
+        _check_folder_path(self.folder)
+        path = self.folder / LOCK_FILE
+        self._created = not self.folder.exists()
+        try:
+            self.folder.mkdir(parents=True, exist_ok=True)
+            fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError as e:
+            raise output_error(path, e) from e
+        if sys.platform != "win32":
+            import fcntl
+
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                holder = os.pread(fd, 64, 0).decode(errors="replace").strip() or "unknown"
+                os.close(fd)
+                raise FolderBusyError(
+                    f"{self.folder} is being written by another tidens process (pid {holder}): "
+                    "wait for it to end, or give another folder"
+                ) from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        self._fd = fd
+        return self
+
+    def release(self) -> None:
+        """Releases the lock; a folder this lock created and nothing was
+        written into (bad input found after the lock) is removed again."""
+        if self._fd is None:
+            return
+        if self._created:
+            try:
+                if [p.name for p in self.folder.iterdir()] == [LOCK_FILE]:
+                    (self.folder / LOCK_FILE).unlink()
+                    self.folder.rmdir()
+            except OSError:
+                pass  # best effort: the folder stays, with the lock file only
+        os.close(self._fd)  # releases the flock
+        self._fd = None
+
+    def __enter__(self) -> FolderLock:
+        return self.acquire()
+
+    def __exit__(self, kind: type[BaseException] | None, value: BaseException | None, tb: TracebackType | None) -> None:
+        self.release()
 
 
 def clear_outputs(path: Path) -> None:
@@ -129,21 +237,22 @@ class CurveWriter:
     row so the file is complete up to the last converged step at any time.
     Raises OutputError naming the file when it cannot be written."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, columns: tuple[str, ...] = CURVE_COLUMNS) -> None:
         self.path = path
+        self.columns = columns
         self.rows = 0
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             self._file: IO[str] = path.open("w", newline="")
             self._csv = csv.writer(self._file)
-            self._csv.writerow(CURVE_COLUMNS)
+            self._csv.writerow(columns)
             self._file.flush()
         except OSError as e:
             raise output_error(path, e) from e
 
     def write(self, point: dict[str, float]) -> None:
         try:
-            self._csv.writerow([_format(point[k], k in COUNT_COLUMNS) for k in CURVE_COLUMNS])
+            self._csv.writerow([_format(point[k], k in COUNT_COLUMNS) for k in self.columns])
             self._file.flush()
         except OSError as e:
             raise output_error(self.path, e) from e
@@ -179,11 +288,11 @@ def read_curve(path: Path) -> dict[str, np.ndarray]:
     return {name: np.atleast_1d(data[name]) for name in data.dtype.names or ()}
 
 
-def write_curve(path: Path, curve: dict[str, np.ndarray]) -> None:
+def write_curve(path: Path, curve: dict[str, np.ndarray], columns: tuple[str, ...] = CURVE_COLUMNS) -> None:
     """Writes a whole curve at once."""
-    with CurveWriter(path) as w:
+    with CurveWriter(path, columns) as w:
         for k in range(len(curve["time_s"])):
-            w.write({c: curve[c][k] for c in CURVE_COLUMNS})
+            w.write({c: curve[c][k] for c in columns})
 
 
 def _json_safe(value: Any) -> Any:
@@ -246,10 +355,14 @@ def write_vtu(path: Path, snapshot: Snapshot) -> Path:
 
 
 def write_pvd(path: Path, entries: list[tuple[float, Path]]) -> Path:
-    """A ParaView collection listing VTU files with their times [s], in time order."""
-    rows = "\n".join(
-        f'    <DataSet timestep="{t!r}" part="0" file="{p.name}"/>' for t, p in sorted(entries, key=lambda e: e[0])
-    )
+    """A ParaView collection listing VTU files with their times [s], in time
+    order; of files at the same time (a snapshot taken at the last step and
+    the final one) only the later in ``entries``, so that ParaView shows no
+    frame twice."""
+    at: dict[float, Path] = {}
+    for t, p in entries:
+        at[t] = p
+    rows = "\n".join(f'    <DataSet timestep="{t!r}" part="0" file="{p.name}"/>' for t, p in sorted(at.items()))
     text = (
         '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n  <Collection>\n'
         f"{rows}\n  </Collection>\n</VTKFile>\n"

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 
+from . import _checks
 from ._core import PRESET_NAMES, Material, tmp_creep_coefficient
 
 DEFAULT_YOUNG_MPA = 4.35e4
@@ -41,8 +42,11 @@ def custom(
     young_mpa: float = DEFAULT_YOUNG_MPA,
     poisson: float = DEFAULT_POISSON,
 ) -> Material:
-    """A Norton material ``eps_dot = creep_c q^creep_n`` (C in MPa^-n s^-1)."""
-    return Material(young_mpa, poisson, creep_c, creep_n)
+    """A Norton material ``eps_dot = creep_c q^creep_n`` (C in MPa^-n s^-1;
+    ``young_mpa`` E in MPa). TypeError naming the argument for a value that
+    is not a real number, ValueError for one out of its range."""
+    r = _checks.real
+    return Material(r("young_mpa", young_mpa, "MPa"), r("poisson", poisson), r("creep_c", creep_c, "MPa^-n s^-1"), r("creep_n", creep_n))
 
 
 def thermal_cycling(
@@ -87,6 +91,26 @@ def thermal_cycling(
     return Material(young_mpa, poisson, c, 1.0)
 
 
+# What each preset is, as a figure's title says it.
+DESCRIPTIONS: dict[str, str] = {
+    "ti64-creep-1293k": "Ti-6Al-4V, creep at 1293 K (beta)",
+    "ti64-tmp-1133-1293k": "Ti-6Al-4V, thermal cycling 1133-1293 K",
+    "cpti-alpha-1003k": "CP-Ti, creep at 1003 K (alpha)",
+    "cpti-alpha-1073k": "CP-Ti, creep at 1073 K (alpha)",
+    "cpti-alpha-1143k": "CP-Ti, creep at 1143 K (alpha)",
+    "cpti-beta-1253k": "CP-Ti, creep at 1253 K (beta)",
+}
+
+
+def describe(material: Material) -> str:
+    """The material in words: the preset's metal and temperature, or its
+    Norton constants for a custom one."""
+    name = name_of(material)
+    if name is not None and name in DESCRIPTIONS:
+        return DESCRIPTIONS[name]
+    return f"Norton C = {material.creep_c:.3g} MPa^-n s^-1, n = {material.creep_n:g}"
+
+
 def name_of(material: Material) -> str | None:
     """The preset name of ``material`` if it equals a preset, else None."""
     for name, m in PRESETS.items():
@@ -115,6 +139,7 @@ __all__ = [
     "Material",
     "by_name",
     "custom",
+    "describe",
     "name_of",
     "thermal_cycling",
     "tmp_creep_coefficient",

@@ -3,6 +3,8 @@ snapshots, run statistics, and the continuum model for comparison."""
 
 from __future__ import annotations
 
+import errno
+
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -100,6 +102,17 @@ class Result:
     accuracy_search: dict[str, Any] | None = None
     # Snapshots an interrupted run wrote before this resumed one: (time, file).
     earlier_snapshots: list[tuple[float, str]] = field(default_factory=list)
+
+    def __repr__(self) -> str:
+        # Short: the dataclass's own repr prints every array of the curve.
+        c = self.case
+        worst = self.estimate().curve.get("relative") if self.error_estimate is not None else None
+        error = "" if worst is None else f", estimated error {100 * worst:.2g} %"
+        return (
+            f"<Result {c.cell.name}, {c.stress_mpa:g} MPa: {self.status} at t = {float(self.time_s[-1]):.4g} s, "
+            f"rho = {float(self.rel_density[-1]):.4f}, {len(self.time_s) - 1} steps, mesh level "
+            f"{c.solver.mesh_level}{error}>"
+        )
 
     @property
     def time_s(self) -> np.ndarray:
@@ -235,8 +248,11 @@ class Result:
         errors = {f"{r:g}": self.time_error_at_density(r) for r in marks}
         model = self.continuum()
         # The mesh starts a little below the exact rho0 the model starts at.
-        continuum_times = {f"{r:g}": float(model.time_to_density(r)[0]) for r in marks if r > model.rho0}
         last = {k: float(v[-1]) for k, v in self.curve.items()}
+        # The model at the marks the run reached, as the run's own times.
+        continuum_times = {
+            f"{r:g}": float(model.time_to_density(r)[0]) for r in marks if model.rho0 < r <= last["rel_density"]
+        }
         return {
             "tidens_version": __version__,
             "status": self.status,
@@ -262,13 +278,10 @@ class Result:
                 "facets": c.solver.contact_facets,
             },
             "solver": c.solver.as_dict(),
-            "mesh_level": c.solver.mesh_level,
-            "tolerance": c.solver.tolerance,
-            "element": c.solver.element,
             "rho0": self.rho0,
             **_particles_summary(c.cell),
-            # (None for cells of octants: NaN becomes null in summary.json.)
-            "final_coordination_number": last.get("coordination_number"),
+            # (None for cells of octants, which have no such column.)
+            "final_coordination_number": last.get("coordination_number") if c.cell.is_periodic else None,
             "final_density": last["rel_density"],
             "final_time_s": last["time_s"],
             "times_to_density_s": reached,
@@ -292,7 +305,7 @@ class Result:
     def write_csv(self, path: str | Path) -> Path:
         """Writes the curve to ``path`` (CSV with a header row)."""
         p = Path(path)
-        io.write_curve(p, self.curve)
+        io.write_curve(p, self.curve, io.curve_columns(self.case.cell.is_periodic))
         return p
 
     def write_summary(self, path: str | Path) -> Path:
@@ -301,8 +314,12 @@ class Result:
         return p
 
     def write_vtu(self, out_dir: str | Path) -> list[Path]:
-        """Writes every snapshot as ``fields_<label>.vtu`` plus ``fields.pvd``."""
+        """Writes every snapshot as ``fields_<label>.vtu`` plus ``fields.pvd``
+        into the folder ``out_dir`` (made if missing); OutputError naming it
+        when it is a file."""
         d = Path(out_dir)
+        if d.exists() and not d.is_dir():
+            raise io.OutputError(errno.ENOTDIR, "not a folder: give a folder for the VTU files", str(d))
         entries = [(s.time_s, io.write_vtu(d / f"fields_{s.label}.vtu", s)) for s in self.snapshots]
         written = {p.name for _, p in entries}
         earlier = [(t, d / name) for t, name in self.earlier_snapshots if name not in written]

@@ -36,15 +36,12 @@ no error estimate (None).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
 
-from .result import MARK_DENSITIES, interpolate_time
+from .result import MARK_DENSITIES, Result, interpolate_time
 
-if TYPE_CHECKING:
-    from .result import Result
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -122,6 +119,8 @@ def map_curve(
     error is estimated (see the module docstring); with ``accuracy`` (a
     relative error of t(rho)) the mapping is refused (ValueError) where that
     estimate exceeds it, or where there is no calibration to estimate it."""
+    if not isinstance(source, Result):
+        raise TypeError(f"source = {source!r}: must be a Result (of Case.run or tidens_rs.load)")
     case = source.case
     n = case.material.creep_n
     s1 = case.knockdown * case.stress_mpa

@@ -105,6 +105,8 @@ def plan(
     ``fcc``, ``sc2``; with a list of cells or aspect ratios the base case's
     cell must be one of them too, rebuilt with each aspect ratio at the
     default radius and size ratio)."""
+    if not isinstance(base, Case):
+        raise TypeError(f"base = {base!r}: must be a Case (the case every point varies)")
     base_aspect = cells_module.aspect_ratio_of(base.cell)
     base_name = base.cell.name
     stresses = _numbers("stresses_mpa", stresses_mpa, [base.stress_mpa])
@@ -406,8 +408,11 @@ def _summary_row(point: Point, folder: Path, reason: str, wall_seconds: float) -
         row[f"t_{k}_s"] = times.get(k)
         row[f"error_{k}"] = errors.get(k)
         row[f"continuum_t_{k}_s"] = model.get(k)
-    for key in ("status", "final_density", "final_time_s", "mesh_level", "tolerance", "element", "steps", "wall_seconds"):
+    for key in ("status", "final_density", "final_time_s", "steps", "wall_seconds"):
         row[key] = summary.get(key)
+    solver = summary.get("solver") or {}
+    for key in ("mesh_level", "tolerance", "element"):
+        row[key] = solver.get(key)
     return row
 
 

@@ -12,7 +12,9 @@ use crate::cell::{CellKind, PyCell};
 use crate::convert::{
     columns_dict, curve_columns, fields_dict, point_dict, stats_dict, status_name,
 };
-use crate::errors::{Phase, StepError, mesh_level_error, parameter_error, poisoned, solver_error};
+use crate::errors::{
+    Number, Phase, StepError, mesh_level_error, parameter_error, poisoned, solver_error,
+};
 use crate::material::PyMaterial;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -165,7 +167,11 @@ impl Knobs<'_> {
                 None => defaults.max_steps,
             },
             checkpoint_every: match self.checkpoint_every {
-                Some(m) => count("checkpoint_every", m, ">= 0 (0: never)")?,
+                Some(m) => count(
+                    "checkpoint_every",
+                    m,
+                    "an integer >= 0 (0: a checkpoint every 50 steps and at any stop, resumed within the Newton tolerance)",
+                )?,
                 None => defaults.checkpoint_every,
             },
             time_targets: self.time_targets_s,
@@ -568,6 +574,24 @@ impl PySimulation {
                 .map_err(|e| solver_error(e, Phase::Run))
         })?;
         Ok(pyo3::types::PyBytes::new(py, &bytes))
+    }
+
+    /// Densities that steps end on (just past each, by at most 2 % of the
+    /// last step's rise), as they end on until_density: a snapshot taken at
+    /// the first step reaching a density is then taken at that density,
+    /// not up to a whole step later. They shorten steps, which changes the
+    /// curve within its time tolerance: a run resumed from a checkpoint
+    /// goes on to the bit only with the same targets. Not recorded in a
+    /// checkpoint. Each must be finite.
+    fn set_density_targets(&self, py: Python<'_>, targets: Vec<f64>) -> PyResult<()> {
+        if let Some((k, r)) = targets.iter().enumerate().find(|(_, r)| !r.is_finite()) {
+            return Err(parameter_error(&format!("targets[{k}]"), Number(*r), "finite"));
+        }
+        py.detach(|| {
+            let mut sim = self.sim.lock().map_err(|_| poisoned())?;
+            sim.set_density_targets(&targets);
+            Ok(())
+        })
     }
 
     /// One converged step (GIL released); returns its curve point.

@@ -100,6 +100,10 @@ pub struct Simulation {
     /// it is moved by (the particles first, unmoved, then their images);
     /// empty for other cells.
     pub(crate) surface_particles: Vec<(usize, [i8; 3])>,
+    /// Densities a step should end just past, as the stop density does (the
+    /// snapshots' densities): set by the caller, not part of the case or of
+    /// a checkpoint, sorted.
+    pub(crate) density_targets: Vec<f64>,
 }
 
 /// Contact between the particles of `scene`, when it has more than one: the
@@ -435,10 +439,24 @@ impl Simulation {
                     .chain(periodic.images.iter().map(|im| (im.particle, im.periods)))
                     .collect()
             }),
+            density_targets: Vec::new(),
         };
         let point = sim.curve_point(volume, 0, 0, 0.0, 0.0);
         sim.curve.push(point);
         Ok(sim)
+    }
+
+    /// Densities a step should end on (just past, as it ends on the stop
+    /// density), such as those of the snapshots a caller takes: without
+    /// them the first step to pass a density can pass it far (a step of
+    /// the sc cell went from rho = 0.58 to 0.61). They shorten steps, so
+    /// they change the curve within its time tolerance; a run resumed from
+    /// a checkpoint goes on as the run that wrote it only if it is given
+    /// the same targets.
+    pub fn set_density_targets(&mut self, targets: &[f64]) {
+        let mut targets: Vec<f64> = targets.iter().copied().filter(|r| r.is_finite()).collect();
+        targets.sort_by(f64::total_cmp);
+        self.density_targets = targets;
     }
 
     /// The densification curve so far (the initial state first).
@@ -581,12 +599,17 @@ impl Simulation {
         let mut dt = self.control.dt_next().min(self.settings.dt_max);
         let full = crate::output::FULL_DENSITY;
         let closing = self.curve.first().is_some_and(|p| p.rel_density < full);
+        let rho = self.rel_density();
         let target = self
-            .settings
-            .until_density
+            .density_targets
+            .iter()
+            .copied()
+            .find(|&r| r > rho)
+            .into_iter()
+            .chain(self.settings.until_density)
+            .reduce(f64::min)
             .or_else(|| closing.then_some(0.5 * (full + 1.0)));
         if let (Some(target), Some(rate)) = (target, self.density_rate()) {
-            let rho = self.rel_density();
             if rate > 0.0 && rho + rate * dt > target {
                 let aimed = (1.02 * (target - rho) / rate).max(dt / TARGET_DENSITY_STEP_FLOOR);
                 dt = aimed.max(self.control.dt_min());
