@@ -10,6 +10,7 @@ import numpy as np
 import numpy.typing as npt
 
 __all__ = [
+    "CheckpointError",
     "ConvergenceError",
     "Cell",
     "Material",
@@ -59,6 +60,12 @@ class ConvergenceError(TidensError):
     dt_s: float | None
     reason: str | None
     result: Any
+
+class CheckpointError(ValueError):
+    """A checkpoint that cannot be resumed: empty, truncated, not a
+    checkpoint, of another format, damaged (a hash does not match), or
+    taken with another case. A ValueError; tidens_rs.resume puts the
+    checkpoint file's path in front of the message."""
 
 class UnsupportedError(TidensError):
     """A scene this version cannot simulate."""

@@ -7,7 +7,8 @@ import math
 import os
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -742,7 +743,8 @@ def resume(
     earlier = [(t, name) for t, name in io.read_pvd(out / "fields.pvd") if name != "fields_final.vtu"]
     stop = out / STOP_CHECKPOINT_FILE
     start = stop if from_last_step and stop.exists() else checkpoint
-    sim = case.simulation(until_density, until_time_s, args["snapshot_times_s"], resume_from=start.read_bytes())
+    with _naming(start):
+        sim = case.simulation(until_density, until_time_s, args["snapshot_times_s"], resume_from=start.read_bytes())
     if interval_changed:
         io.write_json(run_file, {**data, "case": case.as_dict()})
     result, error = case._press(
@@ -810,6 +812,18 @@ def load(out_dir: str | Path) -> Result:
     return result
 
 
+@contextmanager
+def _naming(checkpoint: Path) -> Iterator[None]:
+    """Puts the path of ``checkpoint`` in front of the message of a
+    CheckpointError raised in the block (the core knows only the bytes):
+    "run/checkpoint.bin: truncated (...)"."""
+    try:
+        yield
+    except _core.CheckpointError as e:
+        e.args = (f"{checkpoint}: {e}",)
+        raise
+
+
 def _load_unfinished(out: Path) -> Result:
     """The run in ``out`` that wrote no summary (see :func:`load`)."""
     try:
@@ -819,7 +833,10 @@ def _load_unfinished(out: Path) -> Result:
         curve = io.read_curve(out / "curve.csv")
         checkpoint = out / CHECKPOINT_FILE
         saved = checkpoint.read_bytes() if checkpoint.exists() else None
-        sim = case.simulation(args["until_density"], args["until_time_s"], args["snapshot_times_s"], resume_from=saved)
+        with _naming(checkpoint):
+            sim = case.simulation(args["until_density"], args["until_time_s"], args["snapshot_times_s"], resume_from=saved)
+    except _core.CheckpointError:
+        raise
     except (ValueError, TypeError, KeyError) as e:
         raise ValueError(f"{out}: not the outputs of a run ({type(e).__name__}: {e})") from e
     steps = len(curve["time_s"]) - 1

@@ -15,7 +15,7 @@ mod packing;
 mod simulation;
 
 pub use cell::PyCell;
-pub use errors::{ConvergenceError, TidensError, UnsupportedError};
+pub use errors::{CheckpointError, ConvergenceError, TidensError, UnsupportedError};
 pub use material::{PyMaterial, tmp_creep_coefficient};
 pub use packing::PyPacking;
 pub use simulation::{PySimulation, check_parameters};
@@ -39,8 +39,8 @@ mod _core {
 
     #[pymodule_export]
     use super::{
-        ConvergenceError, PyCell, PyMaterial, PyPacking, PySimulation, TidensError,
-        UnsupportedError, check_parameters, solver_threads, tmp_creep_coefficient,
+        CheckpointError, ConvergenceError, PyCell, PyMaterial, PyPacking, PySimulation,
+        TidensError, UnsupportedError, check_parameters, solver_threads, tmp_creep_coefficient,
     };
 
     #[pymodule_init]

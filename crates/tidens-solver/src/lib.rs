@@ -35,7 +35,7 @@ mod test_support;
 
 pub use cell::{ASPECT_RANGE, Cell, DEFAULT_SIZE_RATIO, Octant, RADIUS_RANGE, SIZE_RATIO_RANGE};
 pub use checkpoint::Checkpoint;
-pub use error::{LinearError, SolverError, StepFailure};
+pub use error::{CheckpointError, LinearError, SolverError, StepFailure};
 pub use load::LoadHistory;
 pub use load_path::TOUCH_TOLERANCE;
 pub use output::{CurvePoint, FULL_DENSITY, Fields, RunStats, Status};
