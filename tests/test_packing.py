@@ -119,15 +119,23 @@ def test_densities_beyond_jamming_are_refused_with_the_density_reached() -> None
     ("kw", "kind", "message"),
     [
         ({"rho0": 0.8}, ValueError, r"rho0 = 0.8: must be in \[0.3, 0.74\]"),
-        ({"particles": 0}, ValueError, r"particles = 0: must be in \[1, 10000\]"),
-        ({"particles": -3}, ValueError, r"particles = -3: must be in \[1, 10000\]"),
+        ({"particles": 0}, ValueError, r"^particles = 0: must be an integer in \[1, 10000\]"),
+        ({"particles": -3}, ValueError, r"^particles = -3: must be an integer in \[1, 10000\]"),
+        ({"particles": 2**70}, ValueError, r"^particles = 1180591620717411303424: must be an integer in \[1, 10000\]"),
+        ({"particles": 8.0}, TypeError, r"^particles = 8.0: must be an integer, not float"),
         ({"mean_radius_mm": -1.0}, ValueError, r"mean_radius_mm = -1"),
         ({"aspect_ratio": 9.0}, ValueError, r"aspect_ratio = 9: must be in \[0.2, 5\]"),
         ({"size_ratio": 0.5}, ValueError, r"size_ratio = 0.5: must be in \(1, 10\]"),
         ({"size_ratio": 2.0, "sigma": 0.1}, ValueError, r"size_ratio and sigma are both given"),
         ({"boundary": "box"}, ValueError, r"boundary = 'box': must be one of periodic, die"),
         ({"rho0": "0.6"}, TypeError, r"rho0"),
-        ({"seed": -1}, ValueError, r"seed = -1: must be an integer >= 0"),
+        ({"seed": -1}, ValueError, r"^seed = -1: must be an integer in \[0, 18446744073709551615\]"),
+        ({"seed": 2**70}, ValueError, r"^seed = 1180591620717411303424: must be an integer in \[0, 18446744073709551615\]"),
+        ({"seed": 2**64}, ValueError, r"^seed = 18446744073709551616: must be an integer in \[0, 18446744073709551615\]"),
+        ({"seed": 1.5}, TypeError, r"^seed = 1.5: must be an integer, not float"),
+        ({"seed": "a"}, TypeError, r"^seed = 'a': must be an integer, not str"),
+        ({"seed": True}, TypeError, r"^seed = True: must be an integer, not bool"),
+        ({"seed": None}, TypeError, r"^seed = None: must be an integer, not NoneType"),
     ],
 )
 def test_bad_packing_arguments_name_themselves(kw: dict[str, object], kind: type[Exception], message: str) -> None:
@@ -135,6 +143,12 @@ def test_bad_packing_arguments_name_themselves(kw: dict[str, object], kind: type
     n = args.pop("particles")
     with pytest.raises(kind, match=message):
         td.Packing.generate(n, **args)  # type: ignore[arg-type]
+
+
+def test_seeds_take_any_64_bit_integer_and_numpy_integers() -> None:
+    assert td.Packing.generate(8, seed=2**64 - 1).to_text() != td.Packing.generate(8, seed=0).to_text()
+    assert td.Packing.generate(8, seed=np.uint64(5)).to_text() == td.Packing.generate(8, seed=5).to_text()  # type: ignore[arg-type]
+    assert len(td.Packing.generate(np.int32(12))) == 12  # type: ignore[arg-type]
 
 
 def test_bad_packing_files_name_the_file_line_and_field(tmp_path: Path) -> None:
@@ -163,7 +177,7 @@ def test_the_pack_command_writes_the_packing_it_reports(tmp_path: Path) -> None:
     assert f"rho0 = {p.rel_density:.6f}" in done.stdout
     assert f"coordination number {pk.coordination_number(p):.3f}" in done.stdout
     bad = subprocess.run([*cmd[:5], "0", "--out", str(out)], capture_output=True, text=True)
-    assert bad.returncode == 2 and "--particles = 0: must be in [1, 10000]" in bad.stderr and bad.stderr.count("\n") == 1
+    assert bad.returncode == 2 and "--particles = 0: must be an integer in [1, 10000]" in bad.stderr and bad.stderr.count("\n") == 1
     dense = subprocess.run([*cmd[:7], "0.8", "--out", str(out)], capture_output=True, text=True)
     assert dense.returncode == 2 and "--rho0 = 0.8: must be in [0.3, 0.74]" in dense.stderr
     jammed = subprocess.run([*cmd[:6], "--jam", "--out", str(out)], capture_output=True, text=True, check=True)

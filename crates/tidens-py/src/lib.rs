@@ -7,6 +7,7 @@
 //! contract is the hand-written stub `python/tidens_rs/_core.pyi`, checked
 //! with `python -m mypy.stubtest tidens_rs._core`.
 
+mod arguments;
 mod cell;
 mod convert;
 mod errors;

@@ -2,12 +2,15 @@
 //! `tidens-packing` crate), generated with the GIL released or read from a
 //! file of centres, semi-axes and axes.
 
+use crate::arguments::integer;
 use crate::errors::{Number, parameter_error};
 use crate::simulation::named;
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use tidens_packing::{Boundary, Packing, PackingError, PackingSpec, SizeDistribution};
+use tidens_packing::{
+    Boundary, MAX_PARTICLES, Packing, PackingError, PackingSpec, SizeDistribution,
+};
 
 /// A contact as Python gets it: (i, j, image of j in box lengths, gap [mm]).
 type ContactTuple = (usize, usize, (i32, i32, i32), f64);
@@ -49,22 +52,29 @@ fn packing_error(e: PackingError) -> PyErr {
     }
 }
 
+/// The `particles` argument: an integer in [1, 10000].
+fn particles_argument(value: &Bound<'_, PyAny>) -> PyResult<usize> {
+    integer("particles", value, 1..=MAX_PARTICLES)
+}
+
+/// The `seed` argument: any 64-bit seed.
+fn seed_argument(value: &Bound<'_, PyAny>) -> PyResult<u64> {
+    integer("seed", value, 0..=u64::MAX)
+}
+
 /// The core's spec from the Python arguments, checked (a ValueError naming
 /// the argument). `sizes`: size_ratio, small_fraction, sigma.
 #[allow(clippy::too_many_arguments)]
 fn spec(
-    particles: i64,
+    count: usize,
     rho0: f64,
     mean_radius_mm: f64,
     aspect_ratio: f64,
     sizes: (Option<f64>, f64, Option<f64>),
     boundary: &str,
     box_aspect: (f64, f64, f64),
-    seed: i64,
+    seed: u64,
 ) -> PyResult<PackingSpec> {
-    let seed = u64::try_from(seed).map_err(|_| parameter_error("seed", seed, "an integer >= 0"))?;
-    let count = usize::try_from(particles)
-        .map_err(|_| parameter_error("particles", particles, "in [1, 10000]"))?;
     let distribution = match sizes {
         (Some(_), _, Some(_)) => {
             return Err(PyValueError::new_err(
@@ -154,7 +164,7 @@ impl PyPacking {
     #[allow(clippy::too_many_arguments)]
     fn generate(
         py: Python<'_>,
-        particles: i64,
+        #[pyo3(from_py_with = particles_argument)] particles: usize,
         rho0: f64,
         mean_radius_mm: f64,
         aspect_ratio: f64,
@@ -163,7 +173,7 @@ impl PyPacking {
         sigma: Option<f64>,
         boundary: &str,
         box_aspect: (f64, f64, f64),
-        seed: i64,
+        #[pyo3(from_py_with = seed_argument)] seed: u64,
         jam: bool,
     ) -> PyResult<Self> {
         let spec = spec(

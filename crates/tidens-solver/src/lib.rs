@@ -41,7 +41,7 @@ pub use load_path::TOUCH_TOLERANCE;
 pub use output::{CurvePoint, FULL_DENSITY, Fields, RunStats, Status};
 pub use periodic::{ParticleImage, Periodic, PlacedSpheroid};
 pub use scene::{MAX_MESH_LEVEL, MeshOptions, Particle, Scene};
-pub use settings::{ContactOptions, HexFacets, NewtonSettings, Settings};
+pub use settings::{ContactOptions, HexFacets, MAX_NEWTON_ITERATIONS, NewtonSettings, Settings};
 pub use simulation::Simulation;
 pub use tidens_contact::ContactMode;
 pub use tidens_fem::ElementKind;
