@@ -3,9 +3,13 @@
 from __future__ import annotations
 
 import math
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
+from types import FrameType
+from typing import Any
 
 import numpy as np
 import pytest
@@ -136,6 +140,7 @@ def test_densities_beyond_jamming_are_refused_with_the_density_reached() -> None
         ({"seed": "a"}, TypeError, r"^seed = 'a': must be an integer, not str"),
         ({"seed": True}, TypeError, r"^seed = True: must be an integer, not bool"),
         ({"seed": None}, TypeError, r"^seed = None: must be an integer, not NoneType"),
+        ({"progress": "yes"}, TypeError, r"^progress = 'yes': must be a callable"),
     ],
 )
 def test_bad_packing_arguments_name_themselves(kw: dict[str, object], kind: type[Exception], message: str) -> None:
@@ -149,6 +154,56 @@ def test_seeds_take_any_64_bit_integer_and_numpy_integers() -> None:
     assert td.Packing.generate(8, seed=2**64 - 1).to_text() != td.Packing.generate(8, seed=0).to_text()
     assert td.Packing.generate(8, seed=np.uint64(5)).to_text() == td.Packing.generate(8, seed=5).to_text()  # type: ignore[arg-type]
     assert len(td.Packing.generate(np.int32(12))) == 12  # type: ignore[arg-type]
+
+
+def test_a_signal_handler_interrupts_a_long_generation() -> None:
+    # 3000 spheres jammed at 0.74 take minutes; the generation runs the
+    # handlers ten times a second, and SIGALRM's raises after 0.3 s.
+    class Alarm(Exception):
+        pass
+
+    def ring(signum: int, frame: FrameType | None) -> None:
+        raise Alarm
+
+    before = signal.signal(signal.SIGALRM, ring)
+    start = time.perf_counter()
+    signal.setitimer(signal.ITIMER_REAL, 0.3)
+    try:
+        with pytest.raises(Alarm):
+            td.Packing.generate(3000, rho0=0.74, jam=True)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, before)
+    assert time.perf_counter() - start < 1.0
+
+
+def test_progress_is_reported_a_few_times_a_second_and_what_it_raises_stops() -> None:
+    class Enough(Exception):
+        pass
+
+    seen: list[tuple[float, dict[str, Any]]] = []
+
+    def progress(p: dict[str, Any]) -> None:
+        seen.append((time.perf_counter(), p))
+        if len(seen) == 3:
+            raise Enough
+
+    start = time.perf_counter()
+    with pytest.raises(Enough):
+        td.Packing.generate(3000, rho0=0.74, jam=True, progress=progress)
+    times = [start] + [t for t, _ in seen]
+    assert all(b - a >= 0.25 for a, b in zip(times, times[1:])), times
+    assert times[-1] - start < 1.5
+    for _, p in seen:
+        assert set(p) == {"stage", "rel_density", "densest", "round", "iterations"}
+        assert p["stage"] in ("start", "compress", "shake", "refine")
+        assert 0.25 <= p["rel_density"] <= 0.74 and 0.0 <= p["densest"] <= 0.74 and p["round"] == 0
+    iterations = [p["iterations"] for _, p in seen]
+    assert iterations == sorted(iterations) and iterations[0] > 0
+    # A quick generation reports nothing and is the same packing.
+    quiet: list[dict[str, Any]] = []
+    assert td.Packing.generate(16, seed=1, progress=quiet.append).to_text() == td.Packing.generate(16, seed=1).to_text()
+    assert quiet == []
 
 
 def test_bad_packing_files_name_the_file_line_and_field(tmp_path: Path) -> None:

@@ -150,9 +150,20 @@ class Packing:
         box_aspect: tuple[float, float, float] = ...,
         seed: int = 0,
         jam: bool = False,
+        progress: Callable[[dict[str, Any]], object] | None = None,
     ) -> Packing:
         """A random dense packing at relative density rho0 (ValueError naming the parameter);
-        jam=True: where it first jams below rho0, that state."""
+        jam=True: where it first jams below rho0, that state.
+
+        Runs with the GIL released and runs Python's signal handlers ten
+        times a second: Ctrl-C raises KeyboardInterrupt (SIGTERM inside
+        signals.sigterm_stops, Terminated) within about 0.1 s, and so does
+        what any handler raises. progress, if given, is called at most four
+        times a second with a dict: stage ("start", "compress", "shake",
+        "refine"), rel_density (the density being relaxed at), densest (the
+        densest overlap-free density so far), round (0, then the shakes
+        done, at most 20) and iterations (relaxation iterations so far);
+        what it raises stops the generation and propagates."""
     @staticmethod
     def from_text(text: str, lengths_mm: tuple[float, float, float], boundary: str = "periodic") -> Packing:
         """Reads `x y z a [c [ax ay az]]` lines (mm) in the box lengths_mm."""

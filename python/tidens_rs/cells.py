@@ -67,7 +67,7 @@ import json
 import math
 import numbers
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -211,6 +211,7 @@ def random(
     aspect_ratio: float = 1.0,
     size_ratio: float | None = None,
     small_fraction: float = 0.5,
+    progress: Callable[[dict[str, Any]], object] | None = None,
 ) -> Cell:
     """A random jammed packing of ``particles`` spheres (or spheroids of
     ``aspect_ratio`` c/a, each along a random axis) in a cube periodic along
@@ -222,7 +223,9 @@ def random(
     the mean volume-equivalent radius; ``size_ratio`` (with
     ``small_fraction``, the small particles' share of the number) makes it
     bimodal. The same arguments give the same packing. See
-    ``Packing.generate`` for the ranges (ValueError naming the argument)."""
+    ``Packing.generate`` for the ranges (ValueError naming the argument),
+    for ``progress`` (called a few times a second with how far the
+    packing got) and for stopping it (Ctrl-C, SIGTERM)."""
     pack = Packing.generate(
         particles,
         rho0=0.74 if rho0 is None else rho0,
@@ -233,6 +236,7 @@ def random(
         small_fraction=small_fraction,
         boundary="periodic",
         seed=seed,
+        progress=progress,
     )
     return from_packing(pack, "random")
 
