@@ -46,9 +46,10 @@ def test_bad_input_leaves_an_earlier_run_untouched(quick_case: td.Case, tmp_path
     out = tmp_path / "run"
     quick_case.run(until_density=0.56, out_dir=out, error_estimate=False)
     before = sorted(p.name for p in out.iterdir())
-    overlapping = td.cells.custom("overlap", (0.1, 0.1, 0.06), [("000", 0.06, 0.06), ("100", 0.06, 0.06)])
-    bad = td.Case(cell=overlapping, material=quick_case.material, stress_mpa=10.0, solver=quick_case.solver)
-    with pytest.raises(td.UnsupportedError):
+    # Refused when the simulation is set up: a periodic cell meshed with tet10.
+    tet10 = td.SolverSettings(mesh_level=1, element="tet10")
+    bad = td.Case(cell=td.cells.as_periodic(td.cells.sc()), material=quick_case.material, stress_mpa=10.0, solver=tet10)
+    with pytest.raises(ValueError, match="hex8 elements only"):
         bad.run(until_density=0.6, out_dir=out, overwrite=True)
     assert sorted(p.name for p in out.iterdir()) == before
 

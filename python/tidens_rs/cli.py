@@ -97,8 +97,12 @@ def _glue_negative_numbers(argv: Sequence[str]) -> list[str]:
 class _Parser(argparse.ArgumentParser):
     """Bad input in one line (and exit status 2), without the usage block."""
 
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {option_names(message)} (see {self.prog} --help)\n")
+    def error(self, message: str, options: bool = True) -> NoReturn:
+        """``options``: write the Python argument names in the message as
+        the options that set them; False for what a file says (a cell
+        file's ``particles`` is its field, not ``--particles``)."""
+        said = option_names(message) if options else message
+        self.exit(2, f"{self.prog}: error: {said} (see {self.prog} --help)\n")
 
 
 def _folder(text: str) -> Path:
@@ -657,7 +661,7 @@ def _show(args: argparse.Namespace) -> int:
     return 0
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser() -> _Parser:
     parser = _Parser(prog="tidens", description="Powder-level FE of hot pressing of titanium powders (units: mm, N, MPa, s).")
     parser.add_argument("--version", action="version", version=f"tidens {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -706,6 +710,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             if args.command == "show":
                 return _show(args)
             return _run(args)
+    except cells.CellFileError as e:
+        parser.error(str(e), options=False)
     except (ValueError, TypeError, FileExistsError, UnsupportedError) as e:
         parser.error(str(e))
     except OSError as e:

@@ -152,7 +152,9 @@ pub(crate) fn solver_error(err: SolverError, phase: Phase) -> PyErr {
         SolverError::Material(e) => material_error(e, phase),
         SolverError::Mesh(MeshError::Level(level)) => mesh_level_error(level),
         SolverError::Mesh(e) => PyValueError::new_err(e.to_string()),
-        SolverError::NoLoadPath { .. } => PyValueError::new_err(err.to_string()),
+        SolverError::NoLoadPath { .. }
+        | SolverError::SameCorner { .. }
+        | SolverError::Overlap { .. } => PyValueError::new_err(err.to_string()),
         // The checkpoint's own words: the caller puts the file in front.
         SolverError::Checkpoint(e @ tidens_solver::CheckpointError::Unwritable { .. }) => {
             TidensError::new_err(format!("checkpoint: {e}"))

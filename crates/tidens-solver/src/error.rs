@@ -13,6 +13,41 @@ pub enum SolverError {
     /// A cell whose particles cannot carry the piston's load to the bottom.
     #[error("cell '{cell}': {reason}")]
     NoLoadPath { cell: String, reason: String },
+    /// Two octants of a cell at one corner: one spheroid's piece twice, or
+    /// two spheroids centred at one point (a line of a cell file written
+    /// twice, say). Indices as the octants were given.
+    #[error(
+        "cell '{cell}': octants[{first}] and octants[{second}] are both at corner {}: \
+         each corner holds one particle",
+        corner_digits(.corner)
+    )]
+    SameCorner {
+        cell: String,
+        first: usize,
+        second: usize,
+        /// The corner (true: the high end of that axis).
+        corner: [bool; 3],
+    },
+    /// Two octants of a cell that overlap (touching is allowed). Indices
+    /// as the octants were given.
+    #[error(
+        "cell '{cell}': octants[{first}] and octants[{second}] overlap (a point of the \
+         surface of octants[{inner}] lies inside octants[{outer}], {:.3} % of its radius \
+         deep along that direction; touching is allowed, to about 5e-5 %)",
+        100.0 * (1.0 - .level.sqrt())
+    )]
+    Overlap {
+        cell: String,
+        first: usize,
+        second: usize,
+        /// The octant whose surface reaches into the other.
+        inner: usize,
+        /// The octant it reaches into.
+        outer: usize,
+        /// The smallest level function of `outer` on the surface of
+        /// `inner` (1 on `outer`'s surface, 0 at its centre).
+        level: f64,
+    },
     /// A scene that this version cannot build.
     #[error("unsupported scene: {0}")]
     Unsupported(String),
@@ -120,6 +155,15 @@ pub enum CheckpointError {
         /// The encoder's reason.
         detail: String,
     },
+}
+
+/// A corner as three 0/1 digits, x first ("011": low x, high y, high z), as
+/// cell files write it.
+fn corner_digits(corner: &[bool; 3]) -> String {
+    corner
+        .iter()
+        .map(|&high| if high { '1' } else { '0' })
+        .collect()
 }
 
 /// The bytes a truncated checkpoint needs, in words.
