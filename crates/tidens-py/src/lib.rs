@@ -14,12 +14,14 @@ mod errors;
 mod material;
 mod packing;
 mod simulation;
+mod size;
 
 pub use cell::PyCell;
 pub use errors::{CheckpointError, ConvergenceError, TidensError, UnsupportedError};
 pub use material::{PyMaterial, tmp_creep_coefficient};
 pub use packing::PyPacking;
 pub use simulation::{PySimulation, check_parameters};
+pub use size::estimate_size;
 
 /// Threads the solver's parallel parts (assembly, large Cholesky
 /// factorisations) run on in this process: ``RAYON_NUM_THREADS`` if set
@@ -41,7 +43,8 @@ mod _core {
     #[pymodule_export]
     use super::{
         CheckpointError, ConvergenceError, PyCell, PyMaterial, PyPacking, PySimulation,
-        TidensError, UnsupportedError, check_parameters, solver_threads, tmp_creep_coefficient,
+        TidensError, UnsupportedError, check_parameters, estimate_size, solver_threads,
+        tmp_creep_coefficient,
     };
 
     #[pymodule_init]

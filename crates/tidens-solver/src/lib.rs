@@ -29,6 +29,7 @@ mod periodic;
 mod scene;
 mod settings;
 mod simulation;
+mod size_estimate;
 mod step_control;
 #[cfg(test)]
 mod test_support;
@@ -43,6 +44,7 @@ pub use periodic::{ParticleImage, Periodic, PlacedSpheroid};
 pub use scene::{MAX_MESH_LEVEL, MeshOptions, Particle, Scene};
 pub use settings::{ContactOptions, HexFacets, MAX_NEWTON_ITERATIONS, NewtonSettings, Settings};
 pub use simulation::Simulation;
+pub use size_estimate::{BASE_BYTES, HEX8_BYTES_PER_DOF, SizeEstimate, TET10_BYTES_PER_DOF};
 pub use tidens_contact::ContactMode;
 pub use tidens_fem::ElementKind;
 pub use tidens_material::{Material, Preset};
