@@ -181,11 +181,60 @@ def test_the_native_constructor_names_the_octant() -> None:
         td.Cell("x", (0.1, 0.1, 0.1), [])
 
 
-def test_overlapping_octants_are_unsupported() -> None:
-    # Two spheres of radius 0.06 centred 0.1 apart along x.
-    cell = td.cells.custom("overlap", (0.1, 0.1, 0.06), [("000", 0.06, 0.06), ("100", 0.06, 0.06)])
-    with pytest.raises(td.UnsupportedError, match="octants 0 and 1 overlap"):
-        quick(cell).simulation(until_density=0.9)
+@pytest.mark.parametrize("aspect_ratio", [0.8, 1.0, 1.3])
+def test_the_presets_build(aspect_ratio: float) -> None:
+    # Their particles touch: the overlap check lets them through.
+    for cell in (td.cells.sc(aspect_ratio=aspect_ratio), td.cells.bcc(aspect_ratio=aspect_ratio),
+                 td.cells.fcc(aspect_ratio=aspect_ratio), td.cells.sc2(aspect_ratio=aspect_ratio),
+                 td.cells.sc2(size_ratio=1.0 + math.sqrt(2.0), aspect_ratio=aspect_ratio)):
+        assert 0.5 < cell.rho0 < 0.8
+        assert td.cells.as_periodic(cell).is_periodic
+
+
+def test_two_octants_at_one_corner_are_refused_when_the_cell_is_built() -> None:
+    # Once 1.047 = 2 pi/6 of density, and an error blaming --until-density later.
+    with pytest.raises(ValueError, match=r"octants\[0\] and octants\[1\] are both at corner 000"):
+        td.cells.custom("dup", (0.05, 0.05, 0.05), [("000", 0.05, 0.05), ("000", 0.05, 0.05)])
+    with pytest.raises(ValueError, match=r"octants\[1\] and octants\[2\] are both at corner 111"):
+        td.cells.custom("dup", (0.1, 0.1, 0.1), [("000", 0.05, 0.05), ("111", 0.05, 0.05), ((True, True, True), 0.02, 0.02)])
+
+
+def test_overlapping_octants_are_refused_when_the_cell_is_built() -> None:
+    # Two spheres of radius 0.06 centred 0.1 apart along x; between them a
+    # small one at another corner, apart from both.
+    with pytest.raises(ValueError, match=r"cell 'overlap': octants\[0\] and octants\[2\] overlap \(") as e:
+        td.cells.custom("overlap", (0.1, 0.1, 0.06), [("000", 0.06, 0.06), ("011", 0.02, 0.02), ("100", 0.06, 0.06)])
+    assert "33.333 % of its radius deep" in str(e.value)
+    # Spheroids too: a flat octant under a tall one above it.
+    with pytest.raises(ValueError, match=r"octants\[0\] and octants\[1\] overlap"):
+        td.cells.custom("flat", (0.1, 0.1, 0.1), [("000", 0.08, 0.04), ("001", 0.03, 0.065)])
+    # Touching, written to seven digits, is not overlapping.
+    assert td.cells.custom("bcc7", (0.05773502,) * 3, [("000", 0.05, 0.05), ("111", 0.05, 0.05)]).rho0 > 0.68
+
+
+def test_overlapping_particles_of_a_periodic_cell_are_refused_when_it_is_built() -> None:
+    sphere = ((0.05, 0.05, 0.05), 0.05, 0.05, (0.0, 0.0, 1.0))
+    near = ((0.12, 0.05, 0.05), 0.05, 0.05, (0.0, 0.0, 1.0))
+    far = ((0.15, 0.15, 0.15), 0.02, 0.02, (0.0, 0.0, 1.0))
+    with pytest.raises(ValueError, match=r"particles\[1\] and particles\[2\] overlap by 0.03"):
+        td.cells.periodic([far, sphere, near], (0.2, 0.2, 0.2))
+    # Across a face: the image of the particle at x = 0.19 reaches x = 0.02 + 0.05.
+    across = ((0.17, 0.05, 0.05), 0.05, 0.05, (0.0, 0.0, 1.0))
+    with pytest.raises(ValueError, match=r"particles\[0\] and particles\[1\] overlap by 0.0[23]"):
+        td.cells.periodic([sphere, across], (0.2, 0.2, 0.2))
+    with pytest.raises(ValueError, match=r"particles\[0\] overlaps its own periodic image .* the box is too small"):
+        td.cells.periodic([sphere], (0.08, 0.2, 0.2))
+    # Touching images (the sc lattice) are not overlapping.
+    assert td.cells.periodic([sphere], (0.1, 0.1, 0.1)).rho0 == pytest.approx(math.pi / 6)
+
+
+def test_a_cell_file_with_duplicate_octants_is_refused_naming_them(tmp_path: Path) -> None:
+    f = tmp_path / "dup.toml"
+    f.write_text('lengths_mm = [0.05, 0.05, 0.05]\n'
+                 '[[octants]]\ncorner = "000"\na = 0.05\nc = 0.05\n'
+                 '[[octants]]\ncorner = [false, false, false]\na = 0.05\nc = 0.05\n')
+    with pytest.raises(ValueError, match=r"octants\[0\] and octants\[1\] are both at corner 000"):
+        td.cells.from_file(f)
 
 
 Press = Callable[..., td.Result]

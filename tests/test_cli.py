@@ -110,13 +110,36 @@ def test_cell_file_from_the_command_line(tmp_path: Path, capsys: pytest.CaptureF
     with pytest.raises(SystemExit) as e:
         main(args)
     assert e.value.code == 2
-    assert "octants 0 and 1 overlap" in capsys.readouterr().err
+    assert "cell file " + str(cell) + ": cell 'overlap': octants[0] and octants[1] overlap" in capsys.readouterr().err
     cell.write_text('lengths_mm = [0.1, 0.1, 0.1]\n[[octants]]\ncorner = [true, false]\na = 0.06\nc = 0.06\n')
     with pytest.raises(SystemExit) as e:
         main(args)
     assert e.value.code == 2
     err = capsys.readouterr().err
     assert str(cell) in err and "octants[0].corner" in err
+
+
+@pytest.mark.parametrize(
+    ("particles", "said"),
+    [
+        ("[]", "particles = []: must be a non-empty list"),
+        ('[{"centre": [0.05, 0.05, 0.05], "a": 0.05, "c": 0.05, "axis": [0, 0, 1]},'
+         ' {"centre": [0.12, 0.05, 0.05], "a": 0.05, "c": 0.05, "axis": [0, 0, 1]}]',
+         "particles[0] and particles[1] overlap by 0.03"),
+        ('[{"centre": [0.05, 0.05, 0.05], "a": 0.2, "c": 0.2, "axis": [0, 0, 1]}]',
+         "particles[0] overlaps its own periodic image"),
+    ],
+)
+def test_a_periodic_cell_files_errors_name_its_fields(tmp_path: Path, capsys: pytest.CaptureFixture[str], particles: str, said: str) -> None:
+    cell = tmp_path / "cell.json"
+    cell.write_text(f'{{"lengths_mm": [0.2, 0.2, 0.2], "periodic": true, "particles": {particles}}}')
+    with pytest.raises(SystemExit) as e:
+        main(["run", "--cell-file", str(cell), "--stress", "10", "--until-density", "0.9", "--out", str(tmp_path / "o"), *QUICK])
+    assert e.value.code == 2
+    err = capsys.readouterr().err
+    assert f"cell file {cell}: {said}" in err, err
+    for option_or_line in ("--particles", "--radius", "line"):
+        assert option_or_line not in err, err
 
 
 @pytest.mark.parametrize(

@@ -176,7 +176,7 @@ def _write(path: Path, text: str) -> Path:
         (["run", "--element", "tet10", "--contact-facets", "bilinear", "--stress", "10", "--until-density", "0.7", "--out", "OUT"],
          2, "--contact-facets = 'bilinear': applies to hex8 elements only"),
         (["run", "--checkpoint-every", "-1", "--stress", "10", "--until-density", "0.7", "--out", "OUT"],
-         2, "0: a checkpoint every 50 steps and at any stop"),
+         2, "--checkpoint-every = -1: must be an integer in [0, 18446744073709551615]"),
         (["run", "--C", "1e-7", "--n", "51", "--stress", "10", "--until-density", "0.7", "--out", "OUT"], 2, "--n = 51: must be in [1, 50]"),
         (["run", "--stress", "10", "--until-density", "0.7", "--out", "AFILE/sub"], 2, "AFILE (in AFILE/sub) is a file, not a folder"),
         (["run", "--stress", "10", "--until-density", "0.7", "--out", "DANGLING"], 2, "DANGLING is a symbolic link to"),

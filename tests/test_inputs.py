@@ -101,6 +101,37 @@ def test_time_to_density_below_rho0_is_an_error(quick_case: td.Case) -> None:
         r.time_to_density(0.3)
 
 
+@pytest.mark.parametrize(
+    ("kw", "kind", "message"),
+    [
+        ({"mesh_level": 2**70}, ValueError, "mesh_level = 1180591620717411303424: must be an integer in [1, 6]"),
+        ({"mesh_level": 2.0}, TypeError, "mesh_level = 2.0: must be an integer, not float"),
+        ({"mesh_level": True}, TypeError, "mesh_level = True: must be an integer, not bool"),
+        ({"max_steps": 0}, ValueError, "max_steps = 0: must be an integer in [1, 18446744073709551615]"),
+        ({"max_steps": 2**64}, ValueError, "max_steps = 18446744073709551616: must be an integer in [1, 18446744073709551615]"),
+        ({"max_steps": "10"}, TypeError, "max_steps = '10': must be an integer, not str"),
+        ({"checkpoint_every": -1}, ValueError, "checkpoint_every = -1: must be an integer in [0, 18446744073709551615]"),
+        ({"checkpoint_every": 1.5}, TypeError, "checkpoint_every = 1.5: must be an integer, not float"),
+        ({"newton_max_iterations": 1001}, ValueError, "newton_max_iterations = 1001: must be an integer in [1, 1000]"),
+        ({"newton_max_iterations": [3]}, TypeError, "newton_max_iterations = [3]: must be an integer, not list"),
+    ],
+)
+def test_the_cores_integer_arguments_name_themselves(kw: dict[str, Any], kind: type[Exception], message: str) -> None:
+    # The native module's own checks (the Python layer checks before it).
+    with pytest.raises(kind) as e:
+        _core.check_parameters(**kw)
+    assert str(e.value) == message
+    with pytest.raises(kind) as e:
+        _core.Simulation(SC, TI64, stress_mpa=10.0, until_density=0.8, **kw)
+    assert str(e.value) == message
+
+
+def test_the_cores_integer_arguments_take_numpy_integers_and_none() -> None:
+    _core.check_parameters(mesh_level=np.int64(2), max_steps=np.uint32(10), checkpoint_every=None)  # type: ignore[arg-type]
+    sim = _core.Simulation(SC, TI64, stress_mpa=10.0, until_density=0.8, mesh_level=np.int8(1))  # type: ignore[arg-type]
+    assert sim.node_count == _core.Simulation(SC, TI64, stress_mpa=10.0, until_density=0.8, mesh_level=1).node_count
+
+
 # Anything a script could pass by mistake, besides plausible numbers.
 anything = st.one_of(
     st.none(),

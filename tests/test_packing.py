@@ -3,9 +3,13 @@
 from __future__ import annotations
 
 import math
+import signal
 import subprocess
 import sys
+import time
 from pathlib import Path
+from types import FrameType
+from typing import Any
 
 import numpy as np
 import pytest
@@ -119,15 +123,24 @@ def test_densities_beyond_jamming_are_refused_with_the_density_reached() -> None
     ("kw", "kind", "message"),
     [
         ({"rho0": 0.8}, ValueError, r"rho0 = 0.8: must be in \[0.3, 0.74\]"),
-        ({"particles": 0}, ValueError, r"particles = 0: must be in \[1, 10000\]"),
-        ({"particles": -3}, ValueError, r"particles = -3: must be in \[1, 10000\]"),
+        ({"particles": 0}, ValueError, r"^particles = 0: must be an integer in \[1, 10000\]"),
+        ({"particles": -3}, ValueError, r"^particles = -3: must be an integer in \[1, 10000\]"),
+        ({"particles": 2**70}, ValueError, r"^particles = 1180591620717411303424: must be an integer in \[1, 10000\]"),
+        ({"particles": 8.0}, TypeError, r"^particles = 8.0: must be an integer, not float"),
         ({"mean_radius_mm": -1.0}, ValueError, r"mean_radius_mm = -1"),
         ({"aspect_ratio": 9.0}, ValueError, r"aspect_ratio = 9: must be in \[0.2, 5\]"),
         ({"size_ratio": 0.5}, ValueError, r"size_ratio = 0.5: must be in \(1, 10\]"),
         ({"size_ratio": 2.0, "sigma": 0.1}, ValueError, r"size_ratio and sigma are both given"),
         ({"boundary": "box"}, ValueError, r"boundary = 'box': must be one of periodic, die"),
         ({"rho0": "0.6"}, TypeError, r"rho0"),
-        ({"seed": -1}, ValueError, r"seed = -1: must be an integer >= 0"),
+        ({"seed": -1}, ValueError, r"^seed = -1: must be an integer in \[0, 18446744073709551615\]"),
+        ({"seed": 2**70}, ValueError, r"^seed = 1180591620717411303424: must be an integer in \[0, 18446744073709551615\]"),
+        ({"seed": 2**64}, ValueError, r"^seed = 18446744073709551616: must be an integer in \[0, 18446744073709551615\]"),
+        ({"seed": 1.5}, TypeError, r"^seed = 1.5: must be an integer, not float"),
+        ({"seed": "a"}, TypeError, r"^seed = 'a': must be an integer, not str"),
+        ({"seed": True}, TypeError, r"^seed = True: must be an integer, not bool"),
+        ({"seed": None}, TypeError, r"^seed = None: must be an integer, not NoneType"),
+        ({"progress": "yes"}, TypeError, r"^progress = 'yes': must be a callable"),
     ],
 )
 def test_bad_packing_arguments_name_themselves(kw: dict[str, object], kind: type[Exception], message: str) -> None:
@@ -135,6 +148,62 @@ def test_bad_packing_arguments_name_themselves(kw: dict[str, object], kind: type
     n = args.pop("particles")
     with pytest.raises(kind, match=message):
         td.Packing.generate(n, **args)  # type: ignore[arg-type]
+
+
+def test_seeds_take_any_64_bit_integer_and_numpy_integers() -> None:
+    assert td.Packing.generate(8, seed=2**64 - 1).to_text() != td.Packing.generate(8, seed=0).to_text()
+    assert td.Packing.generate(8, seed=np.uint64(5)).to_text() == td.Packing.generate(8, seed=5).to_text()  # type: ignore[arg-type]
+    assert len(td.Packing.generate(np.int32(12))) == 12  # type: ignore[arg-type]
+
+
+def test_a_signal_handler_interrupts_a_long_generation() -> None:
+    # 3000 spheres jammed at 0.74 take minutes; the generation runs the
+    # handlers ten times a second, and SIGALRM's raises after 0.3 s.
+    class Alarm(Exception):
+        pass
+
+    def ring(signum: int, frame: FrameType | None) -> None:
+        raise Alarm
+
+    before = signal.signal(signal.SIGALRM, ring)
+    start = time.perf_counter()
+    signal.setitimer(signal.ITIMER_REAL, 0.3)
+    try:
+        with pytest.raises(Alarm):
+            td.Packing.generate(3000, rho0=0.74, jam=True)
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, before)
+    assert time.perf_counter() - start < 1.0
+
+
+def test_progress_is_reported_a_few_times_a_second_and_what_it_raises_stops() -> None:
+    class Enough(Exception):
+        pass
+
+    seen: list[tuple[float, dict[str, Any]]] = []
+
+    def progress(p: dict[str, Any]) -> None:
+        seen.append((time.perf_counter(), p))
+        if len(seen) == 3:
+            raise Enough
+
+    start = time.perf_counter()
+    with pytest.raises(Enough):
+        td.Packing.generate(3000, rho0=0.74, jam=True, progress=progress)
+    times = [start] + [t for t, _ in seen]
+    assert all(b - a >= 0.25 for a, b in zip(times, times[1:])), times
+    assert times[-1] - start < 1.5
+    for _, p in seen:
+        assert set(p) == {"stage", "rel_density", "densest", "round", "iterations"}
+        assert p["stage"] in ("start", "compress", "shake", "refine")
+        assert 0.25 <= p["rel_density"] <= 0.74 and 0.0 <= p["densest"] <= 0.74 and p["round"] == 0
+    iterations = [p["iterations"] for _, p in seen]
+    assert iterations == sorted(iterations) and iterations[0] > 0
+    # A quick generation reports nothing and is the same packing.
+    quiet: list[dict[str, Any]] = []
+    assert td.Packing.generate(16, seed=1, progress=quiet.append).to_text() == td.Packing.generate(16, seed=1).to_text()
+    assert quiet == []
 
 
 def test_bad_packing_files_name_the_file_line_and_field(tmp_path: Path) -> None:
@@ -163,7 +232,7 @@ def test_the_pack_command_writes_the_packing_it_reports(tmp_path: Path) -> None:
     assert f"rho0 = {p.rel_density:.6f}" in done.stdout
     assert f"coordination number {pk.coordination_number(p):.3f}" in done.stdout
     bad = subprocess.run([*cmd[:5], "0", "--out", str(out)], capture_output=True, text=True)
-    assert bad.returncode == 2 and "--particles = 0: must be in [1, 10000]" in bad.stderr and bad.stderr.count("\n") == 1
+    assert bad.returncode == 2 and "--particles = 0: must be an integer in [1, 10000]" in bad.stderr and bad.stderr.count("\n") == 1
     dense = subprocess.run([*cmd[:7], "0.8", "--out", str(out)], capture_output=True, text=True)
     assert dense.returncode == 2 and "--rho0 = 0.8: must be in [0.3, 0.74]" in dense.stderr
     jammed = subprocess.run([*cmd[:6], "--jam", "--out", str(out)], capture_output=True, text=True, check=True)

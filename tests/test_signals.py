@@ -142,3 +142,26 @@ def test_a_sweep_killed_outright_leaves_no_worker_running(tmp_path: Path) -> Non
     counts = [rows(c) for c in curves]
     time.sleep(1.0)
     assert [rows(c) for c in curves] == counts
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["pack", "--particles", "2000", "--jam"],
+        ["run", "--cell", "random", "--particles", "10000", "--stress", "10", "--until-density", "0.9", "--quiet", "--no-error-estimate"],
+    ],
+    ids=["pack", "run"],
+)
+def test_sigterm_stops_a_packing_under_way(command: list[str], tmp_path: Path) -> None:
+    # Jamming 2000 or 10000 spheres takes minutes; the signal lands in it
+    # (the command's imports take well under the 3 s waited).
+    out = tmp_path / ("p.txt" if command[0] == "pack" else "run")
+    process = subprocess.Popen([*COMMAND, *command, "--out", str(out)], stderr=subprocess.PIPE, text=True)
+    time.sleep(3.0)
+    assert process.poll() is None, process.communicate()
+    sent = time.monotonic()
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=60)
+    assert time.monotonic() - sent < 1.0
+    assert process.returncode == 128 + signal.SIGTERM, err
+    assert "tidens: terminated by SIGTERM" in err

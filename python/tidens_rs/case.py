@@ -7,7 +7,8 @@ import math
 import os
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, TypeVar
@@ -840,10 +841,8 @@ def _resume_locked(
     earlier = [(t, name) for t, name in io.read_pvd(out / "fields.pvd") if name != "fields_final.vtu"]
     stop = out / STOP_CHECKPOINT_FILE
     start = stop if from_last_step and stop.exists() else checkpoint
-    try:
+    with _naming(start):
         sim = case.simulation(until_density, until_time_s, args["snapshot_times_s"], resume_from=start.read_bytes())
-    except ValueError as e:
-        raise ValueError(f"{start}: {e}") from e
     if interval_changed:
         io.write_json(run_file, {**data, "case": case.as_dict()})
     result, error = case._press(
@@ -950,6 +949,18 @@ def _read_curve(path: Path) -> dict[str, Any]:
     return curve
 
 
+@contextmanager
+def _naming(checkpoint: Path) -> Iterator[None]:
+    """Puts the path of ``checkpoint`` in front of the message of a
+    CheckpointError raised in the block (the core knows only the bytes):
+    "run/checkpoint.bin: truncated (...)"."""
+    try:
+        yield
+    except _core.CheckpointError as e:
+        e.args = (f"{checkpoint}: {e}",)
+        raise
+
+
 def _load_unfinished(out: Path) -> Result:
     """The run in ``out`` that wrote no summary (see :func:`load`)."""
     record = out / RUN_FILE
@@ -963,10 +974,8 @@ def _load_unfinished(out: Path) -> Result:
         raise ValueError(f"{record}: not the record of a run ({type(e).__name__}: {e})") from e
     checkpoint = out / CHECKPOINT_FILE
     saved = checkpoint.read_bytes() if checkpoint.exists() else None
-    try:
+    with _naming(checkpoint):
         sim = case.simulation(*until, resume_from=saved)
-    except ValueError as e:
-        raise ValueError(f"{checkpoint}: {e}") from e
     steps = len(curve["time_s"]) - 1
     at = f"its last checkpoint (step {len(sim.curve()['time_s']) - 1})" if saved is not None else "its start (no checkpoint)"
     return Result(

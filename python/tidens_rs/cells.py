@@ -52,12 +52,14 @@ or the same as JSON: ``{"name": ..., "lengths_mm": [...], "octants": [{"corner":
 error (a misspelt key would otherwise be ignored silently). Ranges, checked by
 the core: lengths and semi-axes in [1e-6, 1e3] mm, c/a in [0.2, 5], each
 octant inside the box (a <= Lx, Ly; c <= Lz). Errors name the field, e.g.
-``octants[1].a``. Particles that overlap are found when the cell is meshed:
-:class:`tidens_rs.Simulation` (so :meth:`tidens_rs.Case.run`) raises
-:class:`tidens_rs.UnsupportedError`. Both checks allow a relative 1e-6 of
-the spheroid's level function (about 5e-7 of a distance), so lengths of a
+``octants[1].a``. Two octants at one corner, or particles that overlap, are
+refused naming both (``octants[0] and octants[1] are both at corner 000``,
+``octants[0] and octants[2] overlap``, ``particles[1] and particles[4]
+overlap``). Octants may touch, to a relative 1e-6 of the spheroid's level
+function (about 5e-7 of a distance), so lengths of a
 cell whose particles touch need seven significant digits (the bcc box edge
-2R/sqrt(3) as 0.05773503 for R = 0.05, not 0.057735), or round them up. Reading TOML needs Python >= 3.11
+2R/sqrt(3) as 0.05773503 for R = 0.05, not 0.057735), or round them up;
+whole particles of a periodic cell to 1e-6 of the smaller radius. Reading TOML needs Python >= 3.11
 (``tomllib``); on 3.10 use JSON.
 """
 
@@ -67,7 +69,7 @@ import json
 import math
 import numbers
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -78,6 +80,13 @@ from ._core import DEFAULT_SIZE_RATIO, Cell, Packing
 
 DEFAULT_RADIUS_MM = 0.05
 CELL_NAMES = ("sc", "bcc", "fcc", "sc2")
+
+
+class CellFileError(ValueError):
+    """A cell file that cannot be read or does not describe a cell. The
+    message names the file and the field as the file writes it
+    (``octants[1].a``, ``particles``), never a command-line option."""
+
 
 Corner = tuple[bool, bool, bool]
 Octant = tuple[Corner, float, float]
@@ -139,8 +148,9 @@ def custom(name: str, lengths_mm: Sequence[float], octants: Sequence[Sequence[An
     centre sits, three booleans (True = the high end L_i of that axis) or a
     string of three 0/1 digits ("011" = (0, Ly, Lz)); ``a`` and ``c`` [mm] are
     its semi-axes along x, y and along z. Raises ValueError naming the bad
-    field (e.g. ``octants[1].corner``); overlaps are found by the simulation
-    (UnsupportedError).
+    field (e.g. ``octants[1].corner``), two octants at one corner
+    (``octants[0] and octants[1] are both at corner 000``) or two that
+    overlap (``octants[0] and octants[2] overlap``); touching is allowed.
     """
     if not isinstance(name, str):
         raise ValueError(f"name = {name!r}: must be a string")
@@ -165,8 +175,10 @@ def periodic(particles: Sequence[Sequence[Any]], lengths_mm: Sequence[float], na
     its semi-axes [mm] (``a`` across, ``c`` along ``axis``, c/a in [0.2, 5])
     and its symmetry axis (any non-zero vector). Particles may reach across
     the box faces. Raises ValueError naming the bad field (e.g.
-    ``particles[3].centre[0]``); overlaps are found by the simulation
-    (UnsupportedError). Periodic cells are meshed with hex8 elements.
+    ``particles[3].centre[0]``) or the particles that overlap (one another,
+    or an image: ``particles[0] and particles[2] overlap by ... mm``; by
+    more than 1e-6 of the smaller radius, touching is allowed). Periodic
+    cells are meshed with hex8 elements.
     """
     if not isinstance(name, str):
         raise ValueError(f"name = {name!r}: must be a string")
@@ -218,6 +230,7 @@ def random(
     aspect_ratio: float = 1.0,
     size_ratio: float | None = None,
     small_fraction: float = 0.5,
+    progress: Callable[[dict[str, Any]], object] | None = None,
 ) -> Cell:
     """A random jammed packing of ``particles`` spheres (or spheroids of
     ``aspect_ratio`` c/a, each along a random axis) in a cube periodic along
@@ -229,7 +242,9 @@ def random(
     the mean volume-equivalent radius; ``size_ratio`` (with
     ``small_fraction``, the small particles' share of the number) makes it
     bimodal. The same arguments give the same packing. See
-    ``Packing.generate`` for the ranges (ValueError naming the argument)."""
+    ``Packing.generate`` for the ranges (ValueError naming the argument),
+    for ``progress`` (called a few times a second with how far the
+    packing got) and for stopping it (Ctrl-C, SIGTERM)."""
     _sizes(radius_mm=radius_mm, aspect_ratio=aspect_ratio, small_fraction=small_fraction)
     if isinstance(particles, int) and not isinstance(particles, bool) and particles == 1:
         raise ValueError(
@@ -246,6 +261,7 @@ def random(
         small_fraction=small_fraction,
         boundary="periodic",
         seed=seed,
+        progress=progress,
     )
     return from_packing(pack, "random")
 
@@ -306,24 +322,24 @@ def _tables(data: Mapping[str, Any], list_key: str, keys: tuple[str, ...]) -> li
 def from_file(path: str | Path) -> Cell:
     """Reads a cell file, JSON (``.json``) or TOML (``.toml``); the schema is
     in the module docstring. Raises ValueError naming the file and the bad
-    field."""
+    field as the file writes it (:class:`CellFileError`)."""
     p = Path(path)
     suffix = p.suffix.lower()
     try:
         text = p.read_text(encoding="utf-8")
     except OSError as e:
-        raise ValueError(f"cell file {p}: cannot be read ({e.strerror or e})") from e
+        raise CellFileError(f"cell file {p}: cannot be read ({e.strerror or e})") from e
     except UnicodeDecodeError as e:
-        raise ValueError(f"cell file {p}: not a text file (byte {e.start} is not UTF-8): a cell file is JSON or TOML text") from e
+        raise CellFileError(f"cell file {p}: not a text file (byte {e.start} is not UTF-8): a cell file is JSON or TOML text") from e
     data: Any
     if suffix == ".json":
         try:
             data = json.loads(text)
         except json.JSONDecodeError as e:
-            raise ValueError(f"cell file {p}: not valid JSON: {e}") from e
+            raise CellFileError(f"cell file {p}: not valid JSON: {e}") from e
     elif suffix == ".toml":
         if sys.version_info < (3, 11):
-            raise ValueError(
+            raise CellFileError(
                 f"cell file {p}: reading TOML needs Python >= 3.11 (tomllib); "
                 "this is Python 3.10: write the cell as JSON instead"
             )
@@ -332,13 +348,13 @@ def from_file(path: str | Path) -> Cell:
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as e:
-            raise ValueError(f"cell file {p}: not valid TOML: {e}") from e
+            raise CellFileError(f"cell file {p}: not valid TOML: {e}") from e
     else:
-        raise ValueError(f"cell file {p}: unknown suffix {p.suffix!r}: must be .json or .toml")
+        raise CellFileError(f"cell file {p}: unknown suffix {p.suffix!r}: must be .json or .toml")
     try:
         return from_dict(data, default_name=p.stem)
     except ValueError as e:
-        raise ValueError(f"cell file {p}: {e}") from e
+        raise CellFileError(f"cell file {p}: {e}") from e
 
 
 def _periodic_from_dict(data: Mapping[str, Any], default_name: str) -> Cell:

@@ -100,8 +100,12 @@ def _glue_negative_numbers(argv: Sequence[str]) -> list[str]:
 class _Parser(argparse.ArgumentParser):
     """Bad input in one line (and exit status 2), without the usage block."""
 
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {option_names(message)} (see {self.prog} --help)\n")
+    def error(self, message: str, options: bool = True) -> NoReturn:
+        """``options``: write the Python argument names in the message as
+        the options that set them; False for what a file says (a cell
+        file's ``particles`` is its field, not ``--particles``)."""
+        said = option_names(message) if options else message
+        self.exit(2, f"{self.prog}: error: {said} (see {self.prog} --help)\n")
 
 
 def _folder(text: str) -> Path:
@@ -230,15 +234,17 @@ def _cell(args: argparse.Namespace) -> Cell:
             raise ValueError("--periodic does not apply to --cell random: it is periodic already")
         if args.small_fraction is not None and args.size_ratio is None:
             raise ValueError("--small-fraction goes with --size-ratio (a bimodal packing)")
-        return cells.random(
-            16 if args.particles is None else args.particles,
-            seed=0 if args.packing_seed is None else args.packing_seed,
-            rho0=args.rho0,
-            radius_mm=radius,
-            aspect_ratio=aspect,
-            size_ratio=args.size_ratio,
-            small_fraction=0.5 if args.small_fraction is None else args.small_fraction,
-        )
+        with _PackingProgress(quiet=getattr(args, "quiet", False)) as show:
+            return cells.random(
+                16 if args.particles is None else args.particles,
+                seed=0 if args.packing_seed is None else args.packing_seed,
+                rho0=args.rho0,
+                radius_mm=radius,
+                aspect_ratio=aspect,
+                size_ratio=args.size_ratio,
+                small_fraction=0.5 if args.small_fraction is None else args.small_fraction,
+                progress=show,
+            )
     if args.size_ratio is not None and name != "sc2":
         raise ValueError(f"--size-ratio applies to --cell sc2 and random only, not --cell {name}")
     cell = cells.by_name(name, radius, aspect, args.size_ratio)
@@ -568,19 +574,45 @@ def _add_pack_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", type=Path, required=True, help="packing file to write (one particle per line, box and boundary in its header)")
 
 
+class _PackingProgress:
+    """A line on a terminal's stderr, rewritten as a packing grows (a
+    large one takes minutes); nothing when stderr is not a terminal or
+    with ``quiet``. ``with _PackingProgress() as show:`` gives the
+    ``progress`` callable of ``Packing.generate`` (None when silent) and
+    ends the line afterwards."""
+
+    def __init__(self, quiet: bool = False) -> None:
+        self.live = not quiet and sys.stderr.isatty()
+        self.shown = False
+
+    def __enter__(self) -> Callable[[dict[str, Any]], None] | None:
+        return self.show if self.live else None
+
+    def show(self, p: dict[str, Any]) -> None:
+        self.shown = True
+        print(f"\rpacking: {p['stage']}, rho = {p['rel_density']:.4f} (densest {p['densest']:.4f}), "
+              f"round {p['round']}, {p['iterations']} iterations", end="", file=sys.stderr, flush=True)
+
+    def __exit__(self, *exc: object) -> None:
+        if self.shown:
+            print(file=sys.stderr, flush=True)
+
+
 def _generate(args: argparse.Namespace) -> Packing:
-    return Packing.generate(
-        args.particles,
-        rho0=args.rho0 if args.rho0 is not None else (0.74 if args.jam else 0.6),
-        mean_radius_mm=args.radius,
-        aspect_ratio=args.aspect_ratio,
-        size_ratio=args.size_ratio,
-        small_fraction=args.small_fraction,
-        sigma=args.sigma,
-        boundary=args.boundary,
-        seed=args.packing_seed,
-        jam=args.jam,
-    )
+    with _PackingProgress() as show:
+        return Packing.generate(
+            args.particles,
+            rho0=args.rho0 if args.rho0 is not None else (0.74 if args.jam else 0.6),
+            mean_radius_mm=args.radius,
+            aspect_ratio=args.aspect_ratio,
+            size_ratio=args.size_ratio,
+            small_fraction=args.small_fraction,
+            sigma=args.sigma,
+            boundary=args.boundary,
+            seed=args.packing_seed,
+            jam=args.jam,
+            progress=show,
+        )
 
 
 def _pack(args: argparse.Namespace) -> int:
@@ -700,7 +732,7 @@ _COMMANDS = {
 }
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser() -> _Parser:
     parser = _Parser(prog="tidens", description="Powder-level FE of hot pressing of titanium powders (units: mm, N, MPa, s).")
     parser.add_argument("--version", action="version", version=f"tidens {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
@@ -778,6 +810,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             if command == "show":
                 return _show(args)
             return _run(args)
+    except cells.CellFileError as e:
+        subparser.error(str(e), options=False)
     except (FileExistsError, UnsupportedError, NotADirectoryError) as e:
         # Not a typo: the help would not help.
         subparser.exit(2, f"{subparser.prog}: error: {option_names(str(e))}\n")
@@ -801,12 +835,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_TERMINATED if isinstance(e, Terminated) else 130
 
 
-def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
+def _subparser(parser: _Parser, command: str) -> _Parser:
     """The parser of ``command``, whose errors point to its own help."""
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
             found = action.choices.get(command)
-            if isinstance(found, argparse.ArgumentParser):
+            if isinstance(found, _Parser):
                 return found
     return parser
 

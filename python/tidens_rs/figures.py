@@ -219,9 +219,9 @@ class Runs:
         """The random packing of the ``random_packings`` figure: of one
         size, or bimodal (radius ratio, fraction of small particles)."""
         name = random_job_name(bimodal)
-        kw = {} if bimodal is None else {"size_ratio": bimodal[0], "small_fraction": bimodal[1]}
+        size_ratio, small_fraction = (None, 0.5) if bimodal is None else bimodal
         case = Case(
-            cell=cells_module.random(RANDOM_PARTICLES, seed=RANDOM_SEED, **kw),
+            cell=cells_module.random(RANDOM_PARTICLES, seed=RANDOM_SEED, size_ratio=size_ratio, small_fraction=small_fraction),
             material=presets.by_name(CREEP),
             stress_mpa=STUDY_STRESS_MPA,
             solver=SolverSettings(

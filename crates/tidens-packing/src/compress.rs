@@ -17,12 +17,16 @@
 //! last jammed state, shrunk until no overlap is left, is kept. Shaken, 8
 //! and 16 spheres in a cube jammed in one ordered state whatever the seed,
 //! and 32 crystallised into fcc for 6 seeds of 20.
+//!
+//! Every relaxation asks the caller's `stop` before each FIRE iteration
+//! (see [`crate::progress`]); a stop unwinds the whole compression.
 
 use nalgebra::{UnitVector3, Vector3};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::neighbours::Cell;
+use crate::progress::{Progress, Stage, Stopped};
 use crate::relax::{Outcome, Relaxer, Snapshot, turned};
 
 /// Relative density of the random start.
@@ -101,7 +105,7 @@ fn scale_at(phi: f64, rho0: f64) -> f64 {
 }
 
 /// The state of a compression: the relaxer, the last good (relaxed) state
-/// and the densest one.
+/// and the densest one, and what the caller is told.
 struct Compressor<'a> {
     problem: &'a Problem,
     relaxer: Relaxer,
@@ -120,6 +124,10 @@ struct Compressor<'a> {
     jammed: Option<(f64, Snapshot)>,
     /// Shakes done.
     shakes: usize,
+    /// Where the compression is, as the caller sees it.
+    progress: Progress,
+    /// The caller's stop, asked before every FIRE iteration.
+    stop: &'a mut dyn FnMut(&Progress) -> bool,
 }
 
 impl Compressor<'_> {
@@ -127,24 +135,42 @@ impl Compressor<'_> {
         scale_at(phi, self.problem.rho0)
     }
 
+    /// FIRE from the current configuration down to a largest overlap of
+    /// `tol` (see [`Relaxer::relax`]), each iteration counted and the
+    /// caller asked whether to stop.
+    fn relax(&mut self, tol: f64) -> Result<Outcome, Stopped> {
+        let Self {
+            relaxer,
+            progress,
+            stop,
+            ..
+        } = self;
+        relaxer.relax(tol, MAX_ITERATIONS, &mut || {
+            progress.iterations += 1;
+            stop(progress)
+        })
+    }
+
     /// Relaxes the current configuration at `phi` down to a largest overlap
     /// of `tol`; when it relaxes, it becomes the good state (and the best one
     /// when denser).
-    fn accept(&mut self, phi: f64, tol: f64) -> bool {
+    fn accept(&mut self, phi: f64, tol: f64) -> Result<bool, Stopped> {
         self.relaxer.set_scale(self.scale_at(phi));
-        if self.relaxer.relax(tol, MAX_ITERATIONS) != Outcome::Relaxed {
-            return false;
+        self.progress.rel_density = phi;
+        if self.relax(tol)? != Outcome::Relaxed {
+            return Ok(false);
         }
         self.phi_good = phi;
         self.good = self.relaxer.snapshot();
         if phi > self.phi_best {
             self.phi_best = phi;
             self.best.clone_from(&self.good);
+            self.progress.densest = phi;
         }
         if phi < self.problem.rho0 {
             self.below = self.below.max(phi);
         }
-        true
+        Ok(true)
     }
 
     /// Grows the particles from the good state by density steps of `step`
@@ -153,13 +179,13 @@ impl Compressor<'_> {
     /// state shrunk until no overlap is left is accepted when it is denser
     /// than the good state. True when `rho0` is reached, false once the step
     /// falls below `step_min`.
-    fn climb(&mut self, mut step: f64, step_min: f64, tol: f64) -> bool {
+    fn climb(&mut self, mut step: f64, step_min: f64, tol: f64) -> Result<bool, Stopped> {
         let rho0 = self.problem.rho0;
         loop {
             let phi = (self.phi_good + step).min(rho0);
-            if self.accept(phi, tol) {
+            if self.accept(phi, tol)? {
                 if phi >= rho0 {
-                    return true;
+                    return Ok(true);
                 }
                 step = (step * 1.5).min(STEP_MAX);
                 continue;
@@ -171,12 +197,12 @@ impl Compressor<'_> {
             let phi_free = rho0 * s_free * s_free * s_free;
             self.jammed = Some((phi_free, self.relaxer.snapshot()));
             if phi_free > self.phi_good {
-                self.accept(phi_free, tol);
+                self.accept(phi_free, tol)?;
             }
             self.relaxer.restore(&self.good);
             step = 0.5 * (phi - self.phi_good).min(step);
             if step < step_min {
-                return false;
+                return Ok(false);
             }
         }
     }
@@ -185,13 +211,15 @@ impl Compressor<'_> {
     /// relaxes it. A shaken state that cannot be relaxed counts as a shake
     /// and the next one starts again from the good state. False once
     /// [`MAX_SHAKES`] are used up.
-    fn shake(&mut self, rng: &mut ChaCha8Rng) -> bool {
+    fn shake(&mut self, rng: &mut ChaCha8Rng) -> Result<bool, Stopped> {
         let problem = self.problem;
         loop {
             self.shakes += 1;
             if self.shakes > MAX_SHAKES {
-                return false;
+                return Ok(false);
             }
+            self.progress.stage = Stage::Shake;
+            self.progress.round = self.shakes;
             self.relaxer.restore(&self.good);
             let phi_shaken =
                 (self.phi_good - SHAKE_DECOMPRESSION).max(START_DENSITY.min(problem.rho0));
@@ -210,8 +238,8 @@ impl Compressor<'_> {
                     relaxer.axis[i] = turned(&relaxer.axis[i], &(turn.into_inner() * angle));
                 }
             }
-            if self.accept(phi_shaken, problem.tolerance) {
-                return true;
+            if self.accept(phi_shaken, problem.tolerance)? {
+                return Ok(true);
             }
         }
     }
@@ -230,12 +258,15 @@ impl Compressor<'_> {
 /// `rho0`, or, when the packing jams below it, the densest overlap-free
 /// state found after the shakes; with `refine`, the state at the first jam
 /// (not shaken), its jamming point located to a density step of
-/// [`REFINE_STEP_MIN`]. None when the random start cannot be relaxed.
+/// [`REFINE_STEP_MIN`]. None when the random start cannot be relaxed;
+/// `Err(Stopped)` as soon as `stop`, asked before every FIRE iteration,
+/// answers true.
 pub(crate) fn compress(
     problem: &Problem,
     rng: &mut ChaCha8Rng,
     refine: bool,
-) -> Option<Compressed> {
+    stop: &mut dyn FnMut(&Progress) -> bool,
+) -> Result<Option<Compressed>, Stopped> {
     let rho0 = problem.rho0;
     let l = problem.cell.lengths;
     let phi_start = START_DENSITY.min(rho0);
@@ -276,21 +307,24 @@ pub(crate) fn compress(
         below: 0.0,
         jammed: None,
         shakes: 0,
+        progress: Progress::new(),
+        stop,
     };
-    if !c.accept(phi_start, problem.tolerance) {
-        return None;
+    if !c.accept(phi_start, problem.tolerance)? {
+        return Ok(None);
     }
     if phi_start >= rho0 {
-        return Some(c.result());
+        return Ok(Some(c.result()));
     }
     let mut step = STEP_MAX;
     loop {
-        if c.climb(step, STEP_MIN, problem.tolerance) {
-            return Some(c.result());
+        c.progress.stage = Stage::Compress;
+        if c.climb(step, STEP_MIN, problem.tolerance)? {
+            return Ok(Some(c.result()));
         }
         // Jammed below rho0: a jammed packing is refined as it is; to
         // reach rho0, decompress, shake, compress again.
-        if refine || !c.shake(rng) {
+        if refine || !c.shake(rng)? {
             break;
         }
         step = 0.1 * STEP_MAX;
@@ -301,20 +335,22 @@ pub(crate) fn compress(
         // and keep the last jammed state (shrunk until no overlap is left):
         // its contacts are closed to the final step.
         let tol = REFINE_TOLERANCE * problem.tolerance;
+        c.progress.stage = Stage::Refine;
         c.relaxer.restore(&c.best);
         c.good.clone_from(&c.best);
         c.phi_good = c.phi_best;
         c.jammed = None;
-        if !c.climb(STEP_MIN, REFINE_STEP_MIN, tol)
+        if !c.climb(STEP_MIN, REFINE_STEP_MIN, tol)?
             && let Some((phi, state)) = c.jammed.take()
         {
             c.relaxer.restore(&state);
             c.relaxer.set_scale(c.scale_at(phi));
-            if c.relaxer.relax(tol, MAX_ITERATIONS) == Outcome::Relaxed {
+            c.progress.rel_density = phi;
+            if c.relax(tol)? == Outcome::Relaxed {
                 c.phi_best = phi;
                 c.best = c.relaxer.snapshot();
             }
         }
     }
-    Some(c.result())
+    Ok(Some(c.result()))
 }

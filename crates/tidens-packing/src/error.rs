@@ -1,8 +1,11 @@
 //! Errors of the packing generator and of the packing reader.
 
-/// A bad packing specification, a packing file that cannot be read, or a
-/// target density that the relaxation could not reach. Each message names the
-/// parameter (or the line and field), the value and what was allowed.
+use crate::progress::Stage;
+
+/// A bad packing specification, a packing file that cannot be read, a
+/// target density that the relaxation could not reach, or a generation its
+/// caller stopped. Each message names the parameter (or the line and
+/// field), the value and what was allowed.
 #[derive(thiserror::Error, Debug, Clone, PartialEq)]
 pub enum PackingError {
     /// A parameter outside its allowed range, e.g.
@@ -45,6 +48,22 @@ pub enum PackingError {
         /// The densest relative density at which an overlap-free packing was
         /// found.
         reached: f64,
+    },
+    /// The caller stopped the generation: the `stop` callback of
+    /// [`crate::Packing::generate_unless`] or [`crate::Packing::jam_unless`]
+    /// answered true. Nothing is returned: the state of an unfinished
+    /// relaxation overlaps.
+    #[error(
+        "interrupted while relaxing at a relative density of {rel_density} (stage {stage}; \
+         the densest overlap-free state so far: {densest})"
+    )]
+    Interrupted {
+        /// The stage it was in.
+        stage: Stage,
+        /// The relative density it was relaxing at.
+        rel_density: f64,
+        /// The densest overlap-free relative density accepted so far.
+        densest: f64,
     },
     /// A field of a packing file that cannot be read.
     #[error("line {line}: {field}: {message}")]

@@ -11,6 +11,10 @@
 //! `rho0`, box shape, seed); [`Packing::jam`] makes a jammed one, as dense
 //! as the protocol gets, whose particles touch (see [Jammed
 //! packings](#jammed-packings)); [`Packing::from_text`] reads one.
+//! [`Packing::generate_unless`] and [`Packing::jam_unless`] report their
+//! [`Progress`] to a callback that can stop them
+//! ([`PackingError::Interrupted`]): thousands of particles near jamming
+//! take minutes, and Ctrl-C must stop them at once.
 //!
 //! # Method
 //! Overlap relaxation with box compression, the zero-temperature jamming
@@ -150,12 +154,14 @@ mod neighbours;
 mod overlap;
 mod packing;
 mod particle;
+pub mod progress;
 mod relax;
 mod spec;
 
 pub use error::PackingError;
 pub use packing::{Contact, HOLDING_CONTACTS, OVERLAP_TOLERANCE, Packing, Wall, WallContact};
 pub use particle::Particle;
+pub use progress::{Progress, Stage};
 pub use spec::{
     ASPECT_MAX, ASPECT_MIN, Boundary, MAX_PARTICLES, PackingSpec, RHO0_MAX, RHO0_MIN, SIGMA_MAX,
     SIZE_RATIO_MAX, SizeDistribution,

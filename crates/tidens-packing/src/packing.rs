@@ -9,6 +9,7 @@ use crate::error::PackingError;
 use crate::neighbours::{self, Cell};
 use crate::overlap;
 use crate::particle::Particle;
+use crate::progress::{Progress, Stopped};
 use crate::spec::{Boundary, PackingSpec};
 
 /// Largest overlap left in a generated packing, relative to the mean
@@ -92,7 +93,27 @@ impl Packing {
     /// [`PackingError::Rho0Unreachable`] when the relaxation jams below
     /// `rho0`.
     pub fn generate(spec: &PackingSpec) -> Result<Packing, PackingError> {
-        let (shapes, problem, found) = compressed(spec, false)?;
+        Self::generate_unless(spec, &mut |_| false)
+    }
+
+    /// [`Packing::generate`], telling `stop` how far it got before every
+    /// FIRE iteration of the relaxation and stopping as soon as it answers
+    /// true (see [`crate::progress`]: within milliseconds even for 10000
+    /// particles). `stop` runs on the generating thread and is called
+    /// thousands of times a second: keep it cheap, and rate-limit anything
+    /// costly (a progress display, taking a lock) by the clock.
+    ///
+    /// With a `stop` that never answers true the packing is bit for bit
+    /// that of [`Packing::generate`].
+    ///
+    /// # Errors
+    /// As [`Packing::generate`], and [`PackingError::Interrupted`] when
+    /// `stop` answered true.
+    pub fn generate_unless(
+        spec: &PackingSpec,
+        stop: &mut dyn FnMut(&Progress) -> bool,
+    ) -> Result<Packing, PackingError> {
+        let (shapes, problem, found) = compressed(spec, false, stop)?;
         if found.density < spec.rho0 {
             return Err(PackingError::Rho0Unreachable {
                 requested: spec.rho0,
@@ -134,7 +155,20 @@ impl Packing {
     /// relaxed or the packing fails the final overlap check (neither
     /// observed).
     pub fn jam(spec: &PackingSpec) -> Result<Packing, PackingError> {
-        let (shapes, problem, found) = compressed(spec, true)?;
+        Self::jam_unless(spec, &mut |_| false)
+    }
+
+    /// [`Packing::jam`], asking `stop` before every FIRE iteration as
+    /// [`Packing::generate_unless`] does.
+    ///
+    /// # Errors
+    /// As [`Packing::jam`], and [`PackingError::Interrupted`] when `stop`
+    /// answered true.
+    pub fn jam_unless(
+        spec: &PackingSpec,
+        stop: &mut dyn FnMut(&Progress) -> bool,
+    ) -> Result<Packing, PackingError> {
+        let (shapes, problem, found) = compressed(spec, true, stop)?;
         assemble(spec, &shapes, &problem, &found)
     }
 
@@ -316,10 +350,11 @@ impl Packing {
 
 /// The full-size particles of `spec` (centres at the origin), the problem in
 /// the box sized for `spec.rho0`, and what [`compress`] finds (refining a
-/// jammed state with `refine`).
+/// jammed state with `refine`, asking `stop` before every FIRE iteration).
 fn compressed(
     spec: &PackingSpec,
     refine: bool,
+    stop: &mut dyn FnMut(&Progress) -> bool,
 ) -> Result<(Vec<Particle>, Problem, Compressed), PackingError> {
     let radii = spec.radii()?;
     let semi_axes: Vec<(f64, f64)> = radii.iter().map(|&r| spec.semi_axes(r)).collect();
@@ -358,10 +393,22 @@ fn compressed(
         tolerance: 0.1 * OVERLAP_TOLERANCE * spec.mean_radius,
     };
     let mut rng = stream(spec.seed, PLACEMENT_STREAM);
-    let found = compress(&problem, &mut rng, refine).ok_or(PackingError::Rho0Unreachable {
-        requested: spec.rho0,
-        reached: 0.0,
-    })?;
+    // The last progress reported, for the error of a stop.
+    let mut last = Progress::new();
+    let found = compress(&problem, &mut rng, refine, &mut |p| {
+        last = *p;
+        stop(p)
+    });
+    let found = found
+        .map_err(|Stopped| PackingError::Interrupted {
+            stage: last.stage,
+            rel_density: last.rel_density,
+            densest: last.densest,
+        })?
+        .ok_or(PackingError::Rho0Unreachable {
+            requested: spec.rho0,
+            reached: 0.0,
+        })?;
     Ok((shapes, problem, found))
 }
 

@@ -15,6 +15,7 @@ use nalgebra::{Rotation3, UnitVector3, Vector3};
 
 use crate::neighbours::{self, Cell, PairImage};
 use crate::overlap::{self, Shape};
+use crate::progress::Stopped;
 
 /// FIRE parameters (FIRE 2.0 defaults, time step for unit stiffness).
 const DT_START: f64 = 0.1;
@@ -282,8 +283,15 @@ impl Relaxer {
     }
 
     /// FIRE until the largest overlap is at most `tol` \[mm\], the system is
-    /// force-balanced with overlaps left, or `max_iter` steps.
-    pub(crate) fn relax(&mut self, tol: f64, max_iter: usize) -> Outcome {
+    /// force-balanced with overlaps left, or `max_iter` steps; `Err(Stopped)`
+    /// as soon as `stop`, asked before every step, answers true (the
+    /// configuration is then that of the step reached).
+    pub(crate) fn relax(
+        &mut self,
+        tol: f64,
+        max_iter: usize,
+        stop: &mut dyn FnMut() -> bool,
+    ) -> Result<Outcome, Stopped> {
         let n = self.pos.len();
         let mut vel = vec![Vector3::zeros(); n];
         let mut omega = vec![Vector3::zeros(); n];
@@ -292,10 +300,13 @@ impl Relaxer {
         let mut positive = 0usize;
         let lever: Vec<f64> = (0..n).map(|i| self.bound(i)).collect();
         for _ in 0..max_iter {
+            if stop() {
+                return Err(Stopped);
+            }
             self.ensure_list();
             let eval = self.evaluate();
             if eval.max_overlap <= tol {
-                return Outcome::Relaxed;
+                return Ok(Outcome::Relaxed);
             }
             // Generalised forces: F and T / R.
             let mut fmax2 = 0.0_f64;
@@ -309,7 +320,7 @@ impl Relaxer {
                 f2 += f.norm_squared() + q.norm_squared();
             }
             if fmax2.sqrt() <= JAM_RATIO * eval.max_overlap {
-                return Outcome::Stuck;
+                return Ok(Outcome::Stuck);
             }
             if power > 0.0 {
                 positive += 1;
@@ -355,11 +366,11 @@ impl Relaxer {
             }
         }
         self.ensure_list();
-        if self.evaluate().max_overlap <= tol {
+        Ok(if self.evaluate().max_overlap <= tol {
             Outcome::Relaxed
         } else {
             Outcome::Stuck
-        }
+        })
     }
 }
 

@@ -1,7 +1,9 @@
 //! `Cell`: the unit cell of a particle packing that a simulation presses.
 
 use crate::errors::{Number, Phase, parameter_error, solver_error};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
+use tidens_packing::{Boundary, OVERLAP_TOLERANCE, Packing, Particle};
 use tidens_solver::{ASPECT_RANGE, Cell, Octant, PlacedSpheroid, RADIUS_RANGE, SolverError};
 
 /// An octant as Python passes it: ((high_x, high_y, high_z), a_mm, c_mm).
@@ -15,9 +17,10 @@ pub(crate) type OctantTuple = ((bool, bool, bool), f64, f64);
 /// along x, y (a) and z (c) [mm]. z is the pressing direction (the piston is
 /// the face z = Lz). Checked here: lengths and semi-axes in [1e-6, 1e3] mm,
 /// c/a in [0.2, 5], every octant inside the box (ValueError naming the field,
-/// e.g. octants[1].a). Overlapping particles are found when the cell is
-/// meshed: Simulation raises UnsupportedError. Presets: Cell.sc, Cell.bcc,
-/// Cell.fcc, Cell.sc2.
+/// e.g. octants[1].a), one octant per corner and no two overlapping
+/// (ValueError naming both, e.g. "octants[0] and octants[2] overlap";
+/// touching is allowed, to a relative 1e-6 of the level function, about
+/// 5e-7 of a distance). Presets: Cell.sc, Cell.bcc, Cell.fcc, Cell.sc2.
 #[pyclass(name = "Cell", module = "tidens_rs._core", frozen)]
 #[derive(Clone, Debug)]
 pub struct PyCell {
@@ -135,6 +138,56 @@ fn placed(lengths: [f64; 3], particles: &[ParticleTuple]) -> PyResult<Vec<Placed
         .collect()
 }
 
+/// Refuses particles of a periodic cell that overlap one another, or an
+/// image of one another or of themselves, by more than [`OVERLAP_TOLERANCE`]
+/// of the smaller volume-equivalent radius: the test of a packing file
+/// (`Packing.from_text`, exact for spheroids: Perram-Wertheim), here naming
+/// the particles as given, `particles[k]`.
+fn check_apart(lengths: [f64; 3], particles: &[PlacedSpheroid]) -> PyResult<()> {
+    let packing = Packing {
+        lengths,
+        boundary: Boundary::Periodic,
+        particles: particles
+            .iter()
+            .map(|p| {
+                let norm = p.axis.iter().map(|v| v * v).sum::<f64>().sqrt();
+                Particle {
+                    centre: p.centre,
+                    a: p.a,
+                    c: p.c,
+                    axis: p.axis.map(|v| v / norm),
+                }
+            })
+            .collect(),
+    };
+    for contact in packing.contacts(0.0) {
+        let (i, j) = (contact.i, contact.j);
+        let (p, q) = (&packing.particles[i], &packing.particles[j]);
+        let allowed = OVERLAP_TOLERANCE * p.equivalent_radius().min(q.equivalent_radius());
+        let depth = -contact.gap;
+        if depth <= allowed {
+            continue;
+        }
+        let which = if i == j {
+            format!(
+                "particles[{i}] overlaps its own periodic image by {} mm: the box is too \
+                 small for it",
+                Number(depth)
+            )
+        } else {
+            format!(
+                "particles[{i}] and particles[{j}] overlap by {} mm",
+                Number(depth)
+            )
+        };
+        return Err(PyValueError::new_err(format!(
+            "{which} (touching is allowed, to 1e-6 of the smaller radius: {} mm)",
+            Number(allowed)
+        )));
+    }
+    Ok(())
+}
+
 /// The core checks the octants in order but does not say which one failed:
 /// find the first octant that fails alone and name it, `octants[k].a`.
 fn octant_error(err: SolverError, name: &str, lengths: [f64; 3], octants: &[Octant]) -> PyErr {
@@ -229,8 +282,9 @@ impl PyCell {
     /// with c/a in [0.2, 5], and its symmetry axis (any non-zero vector).
     /// Particles may reach across the box faces: they touch the periodic
     /// images of the others there. Meshed whole with hex8 elements.
-    /// ValueError names the field (particles[2].centre[0]); overlaps are
-    /// found when the cell is meshed (Simulation raises UnsupportedError).
+    /// ValueError names the field (particles[2].centre[0]), or the
+    /// particles that overlap one another or an image (by more than 1e-6
+    /// of the smaller radius; touching is allowed).
     #[staticmethod]
     fn periodic(
         name: String,
@@ -249,6 +303,7 @@ impl PyCell {
             }
         }
         let particles = placed(lengths, &particles)?;
+        check_apart(lengths, &particles)?;
         Ok(Self {
             inner: CellKind::Periodic {
                 name,

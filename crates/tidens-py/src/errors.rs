@@ -33,6 +33,15 @@ create_exception!(
 );
 create_exception!(
     tidens_rs._core,
+    CheckpointError,
+    PyValueError,
+    "A checkpoint that cannot be resumed: empty, truncated, not a\n\
+     checkpoint, of another format, damaged (a hash does not match), or\n\
+     taken with another case. A ValueError; tidens_rs.resume puts the\n\
+     checkpoint file's path in front of the message."
+);
+create_exception!(
+    tidens_rs._core,
     UnsupportedError,
     TidensError,
     "A scene this version cannot simulate."
@@ -143,9 +152,14 @@ pub(crate) fn solver_error(err: SolverError, phase: Phase) -> PyErr {
         SolverError::Material(e) => material_error(e, phase),
         SolverError::Mesh(MeshError::Level(level)) => mesh_level_error(level),
         SolverError::Mesh(e) => PyValueError::new_err(e.to_string()),
-        SolverError::NoLoadPath { .. } | SolverError::Checkpoint(_) => {
-            PyValueError::new_err(err.to_string())
+        SolverError::NoLoadPath { .. }
+        | SolverError::SameCorner { .. }
+        | SolverError::Overlap { .. } => PyValueError::new_err(err.to_string()),
+        // The checkpoint's own words: the caller puts the file in front.
+        SolverError::Checkpoint(e @ tidens_solver::CheckpointError::Unwritable { .. }) => {
+            TidensError::new_err(format!("checkpoint: {e}"))
         }
+        SolverError::Checkpoint(e) => CheckpointError::new_err(e.to_string()),
         SolverError::Unsupported(_) => UnsupportedError::new_err(err.to_string()),
         SolverError::Fem(_) => match phase {
             Phase::Setup => PyValueError::new_err(err.to_string()),

@@ -7,18 +7,21 @@
 //! contract is the hand-written stub `python/tidens_rs/_core.pyi`, checked
 //! with `python -m mypy.stubtest tidens_rs._core`.
 
+mod arguments;
 mod cell;
 mod convert;
 mod errors;
 mod material;
 mod packing;
 mod simulation;
+mod size;
 
 pub use cell::PyCell;
-pub use errors::{ConvergenceError, TidensError, UnsupportedError};
+pub use errors::{CheckpointError, ConvergenceError, TidensError, UnsupportedError};
 pub use material::{PyMaterial, tmp_creep_coefficient};
 pub use packing::PyPacking;
 pub use simulation::{PySimulation, check_parameters};
+pub use size::estimate_size;
 
 /// Threads the solver's parallel parts (assembly, large Cholesky
 /// factorisations) run on in this process: ``RAYON_NUM_THREADS`` if set
@@ -39,8 +42,9 @@ mod _core {
 
     #[pymodule_export]
     use super::{
-        ConvergenceError, PyCell, PyMaterial, PyPacking, PySimulation, TidensError,
-        UnsupportedError, check_parameters, solver_threads, tmp_creep_coefficient,
+        CheckpointError, ConvergenceError, PyCell, PyMaterial, PyPacking, PySimulation,
+        TidensError, UnsupportedError, check_parameters, estimate_size, solver_threads,
+        tmp_creep_coefficient,
     };
 
     #[pymodule_init]

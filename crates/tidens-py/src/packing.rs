@@ -1,13 +1,32 @@
 //! `Packing`: a random dense packing of spheres or spheroids (the
 //! `tidens-packing` crate), generated with the GIL released or read from a
 //! file of centres, semi-axes and axes.
+//!
+//! A generation of thousands of particles takes minutes. It asks the
+//! core's `stop` callback before every FIRE iteration; the callback takes
+//! the GIL at most every [`SIGNAL_INTERVAL`] to run Python's signal
+//! handlers (Ctrl-C's KeyboardInterrupt, `signals.sigterm_stops`'s
+//! Terminated) and at most every [`PROGRESS_INTERVAL`] to call the user's
+//! `progress`; what either raises stops the generation and propagates.
 
+use crate::arguments::integer;
 use crate::errors::{Number, parameter_error};
 use crate::simulation::named;
 use numpy::{PyArray1, PyArray2, PyArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use tidens_packing::{Boundary, Packing, PackingError, PackingSpec, SizeDistribution};
+use pyo3::types::PyDict;
+use std::time::{Duration, Instant};
+use tidens_packing::{
+    Boundary, MAX_PARTICLES, Packing, PackingError, PackingSpec, Progress, SizeDistribution,
+};
+
+/// How often a generation runs Python's signal handlers: a stop within a
+/// tenth of a second, and the GIL taken ten times a second at most (each
+/// time for microseconds), so other Python threads hardly notice.
+const SIGNAL_INTERVAL: Duration = Duration::from_millis(100);
+/// How often a generation calls `progress`: four times a second at most.
+const PROGRESS_INTERVAL: Duration = Duration::from_millis(250);
 
 /// A contact as Python gets it: (i, j, image of j in box lengths, gap [mm]).
 type ContactTuple = (usize, usize, (i32, i32, i32), f64);
@@ -49,22 +68,29 @@ fn packing_error(e: PackingError) -> PyErr {
     }
 }
 
+/// The `particles` argument: an integer in [1, 10000].
+fn particles_argument(value: &Bound<'_, PyAny>) -> PyResult<usize> {
+    integer("particles", value, 1..=MAX_PARTICLES)
+}
+
+/// The `seed` argument: any 64-bit seed.
+fn seed_argument(value: &Bound<'_, PyAny>) -> PyResult<u64> {
+    integer("seed", value, 0..=u64::MAX)
+}
+
 /// The core's spec from the Python arguments, checked (a ValueError naming
 /// the argument). `sizes`: size_ratio, small_fraction, sigma.
 #[allow(clippy::too_many_arguments)]
 fn spec(
-    particles: i64,
+    count: usize,
     rho0: f64,
     mean_radius_mm: f64,
     aspect_ratio: f64,
     sizes: (Option<f64>, f64, Option<f64>),
     boundary: &str,
     box_aspect: (f64, f64, f64),
-    seed: i64,
+    seed: u64,
 ) -> PyResult<PackingSpec> {
-    let seed = u64::try_from(seed).map_err(|_| parameter_error("seed", seed, "an integer >= 0"))?;
-    let count = usize::try_from(particles)
-        .map_err(|_| parameter_error("particles", particles, "in [1, 10000]"))?;
     let distribution = match sizes {
         (Some(_), _, Some(_)) => {
             return Err(PyValueError::new_err(
@@ -91,6 +117,68 @@ fn spec(
     };
     spec.validate().map_err(packing_error)?;
     Ok(spec)
+}
+
+/// The progress of a generation as `progress` gets it.
+fn progress_dict<'py>(py: Python<'py>, p: &Progress) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("stage", p.stage.name())?;
+    d.set_item("rel_density", p.rel_density)?;
+    d.set_item("densest", p.densest)?;
+    d.set_item("round", p.round)?;
+    d.set_item("iterations", p.iterations)?;
+    Ok(d)
+}
+
+/// Generates the packing of `spec` (`jam`: [`Packing::jam`]) with the GIL
+/// released, running Python's signal handlers and `progress` from the
+/// core's stop callback at a bounded rate; what they raise ends the
+/// generation and is returned.
+fn generate_watched(
+    py: Python<'_>,
+    spec: &PackingSpec,
+    jam: bool,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Packing> {
+    let make = if jam {
+        Packing::jam_unless
+    } else {
+        Packing::generate_unless
+    };
+    let mut raised: Option<PyErr> = None;
+    let result = py.detach(|| {
+        let (mut signals_at, mut progress_at) = (Instant::now(), Instant::now());
+        make(spec, &mut |p| {
+            let now = Instant::now();
+            let signals_due = now - signals_at >= SIGNAL_INTERVAL;
+            let progress_due = progress.is_some() && now - progress_at >= PROGRESS_INTERVAL;
+            if !(signals_due || progress_due) {
+                return false;
+            }
+            let outcome = Python::attach(|py| {
+                if signals_due {
+                    signals_at = now;
+                    py.check_signals()?;
+                }
+                if let (true, Some(callback)) = (progress_due, &progress) {
+                    progress_at = now;
+                    callback.call1(py, (progress_dict(py, p)?,))?;
+                }
+                Ok(())
+            });
+            match outcome {
+                Ok(()) => false,
+                Err(e) => {
+                    raised = Some(e);
+                    true
+                }
+            }
+        })
+    });
+    match (result, raised) {
+        (Err(PackingError::Interrupted { .. }), Some(e)) => Err(e),
+        (result, _) => result.map_err(packing_error),
+    }
 }
 
 /// A packing of spheroids in a box [0, Lx) x [0, Ly) x [0, Lz) [mm].
@@ -136,6 +224,17 @@ impl PyPacking {
     /// about 6 contacts per sphere without rattlers. A box that fits a
     /// crystal (32 spheres in a cube fit fcc) can crystallise and reach
     /// rho0 itself: check the coordination number.
+    ///
+    /// Runs with the GIL released; Python's signal handlers run ten times
+    /// a second, so Ctrl-C raises KeyboardInterrupt (and SIGTERM, inside
+    /// signals.sigterm_stops, Terminated) within about 0.1 s. progress: a
+    /// callable, called at most four times a second with a dict: stage
+    /// ("start": relaxing the random start, "compress", "shake": after a
+    /// jam below rho0, "refine": locating the jamming point with jam=True),
+    /// rel_density (the density being relaxed at), densest (the densest
+    /// overlap-free density so far), round (0, then the number of shakes,
+    /// at most 20), iterations (relaxation iterations so far). What it
+    /// raises stops the generation and propagates.
     #[staticmethod]
     #[pyo3(signature = (
         particles,
@@ -150,11 +249,12 @@ impl PyPacking {
         box_aspect = (1.0, 1.0, 1.0),
         seed = 0,
         jam = false,
+        progress = None,
     ))]
     #[allow(clippy::too_many_arguments)]
     fn generate(
         py: Python<'_>,
-        particles: i64,
+        #[pyo3(from_py_with = particles_argument)] particles: usize,
         rho0: f64,
         mean_radius_mm: f64,
         aspect_ratio: f64,
@@ -163,8 +263,9 @@ impl PyPacking {
         sigma: Option<f64>,
         boundary: &str,
         box_aspect: (f64, f64, f64),
-        seed: i64,
+        #[pyo3(from_py_with = seed_argument)] seed: u64,
         jam: bool,
+        progress: Option<Py<PyAny>>,
     ) -> PyResult<Self> {
         let spec = spec(
             particles,
@@ -176,8 +277,15 @@ impl PyPacking {
             box_aspect,
             seed,
         )?;
-        let make = if jam { Packing::jam } else { Packing::generate };
-        let inner = py.detach(move || make(&spec)).map_err(packing_error)?;
+        if let Some(callback) = &progress
+            && !callback.bind(py).is_callable()
+        {
+            return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                "progress = {}: must be a callable (taking a dict) or None",
+                callback.bind(py).repr()?
+            )));
+        }
+        let inner = generate_watched(py, &spec, jam, progress)?;
         Ok(Self { inner })
     }
 

@@ -8,13 +8,12 @@
 //! the step in progress. Every wait for a lock happens with the GIL released
 //! and no lock is held while waiting for the GIL, so the two cannot deadlock.
 
+use crate::arguments::optional_integer;
 use crate::cell::{CellKind, PyCell};
 use crate::convert::{
     columns_dict, curve_columns, fields_dict, point_dict, stats_dict, status_name,
 };
-use crate::errors::{
-    Number, Phase, StepError, mesh_level_error, parameter_error, poisoned, solver_error,
-};
+use crate::errors::{Phase, StepError, poisoned, solver_error};
 use crate::material::PyMaterial;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -22,7 +21,8 @@ use pyo3::types::{PyBool, PyDict};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 use tidens_solver::{
     Checkpoint, ContactMode, ContactOptions, CurvePoint, ElementKind, HexFacets, LoadHistory,
-    MeshOptions, NewtonSettings, RunStats, Scene, Settings, Simulation, SolverError, Status,
+    MAX_MESH_LEVEL, MAX_NEWTON_ITERATIONS, MeshOptions, NewtonSettings, RunStats, Scene, Settings,
+    Simulation, SolverError, Status,
 };
 
 /// The Python names of the contact modes, in the order of `CONTACT_MODES`.
@@ -106,15 +106,35 @@ pub(crate) fn solver_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     Ok(d)
 }
 
+/// The `mesh_level` argument: None or an integer in [1, 6].
+pub(crate) fn mesh_level_argument(value: &Bound<'_, PyAny>) -> PyResult<Option<u32>> {
+    optional_integer("mesh_level", value, 1..=MAX_MESH_LEVEL)
+}
+
+/// The `max_steps` argument: None or an integer >= 1.
+fn max_steps_argument(value: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
+    optional_integer("max_steps", value, 1..=usize::MAX)
+}
+
+/// The `newton_max_iterations` argument: None or an integer in [1, 1000].
+fn newton_max_iterations_argument(value: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
+    optional_integer("newton_max_iterations", value, 1..=MAX_NEWTON_ITERATIONS)
+}
+
+/// The `checkpoint_every` argument: None or an integer >= 0 (0: the caller checkpoints every 50 steps and at any stop; the core then never drops its caches).
+fn checkpoint_every_argument(value: &Bound<'_, PyAny>) -> PyResult<Option<usize>> {
+    optional_integer("checkpoint_every", value, 0..=usize::MAX)
+}
+
 /// The load, stop and solver knobs of a run as the Python keyword arguments
-/// give them (None: the core's default).
+/// give them (None: the core's default), the integers already checked.
 struct Knobs<'a> {
     stress_mpa: f64,
     knockdown: f64,
     ramp_time_s: f64,
     until_density: Option<f64>,
     until_time_s: Option<f64>,
-    mesh_level: Option<i64>,
+    mesh_level: Option<u32>,
     grading: Option<f64>,
     exact_volume: Option<bool>,
     element: Option<&'a str>,
@@ -122,16 +142,16 @@ struct Knobs<'a> {
     max_strain_increment: Option<f64>,
     dt_initial_s: Option<f64>,
     dt_max_s: Option<f64>,
-    max_steps: Option<i64>,
+    max_steps: Option<usize>,
     time_targets_s: Vec<f64>,
-    newton_max_iterations: Option<i64>,
+    newton_max_iterations: Option<usize>,
     newton_residual_tolerance: Option<f64>,
     contact: &'a str,
     tied_planes: bool,
     contact_penalty_factor: Option<f64>,
     penetration_tolerance: Option<f64>,
     contact_facets: Option<&'a str>,
-    checkpoint_every: Option<i64>,
+    checkpoint_every: Option<usize>,
 }
 
 impl Knobs<'_> {
@@ -147,10 +167,7 @@ impl Knobs<'_> {
         };
         let defaults = Settings::new(load);
         let mesh_defaults = MeshOptions::default();
-        let level = match self.mesh_level {
-            Some(l) => u32::try_from(l).map_err(|_| mesh_level_error(l))?,
-            None => mesh_defaults.level,
-        };
+        let level = self.mesh_level.unwrap_or(mesh_defaults.level);
         let newton = &defaults.newton;
         let contact_defaults = &defaults.contact;
         let settings = Settings {
@@ -162,24 +179,11 @@ impl Knobs<'_> {
                 .unwrap_or(defaults.max_strain_increment),
             dt_initial: self.dt_initial_s,
             dt_max: self.dt_max_s.unwrap_or(defaults.dt_max),
-            max_steps: match self.max_steps {
-                Some(m) => count("max_steps", m, ">= 1")?,
-                None => defaults.max_steps,
-            },
-            checkpoint_every: match self.checkpoint_every {
-                Some(m) => count(
-                    "checkpoint_every",
-                    m,
-                    "an integer >= 0 (0: a checkpoint every 50 steps and at any stop, resumed within the Newton tolerance)",
-                )?,
-                None => defaults.checkpoint_every,
-            },
+            max_steps: self.max_steps.unwrap_or(defaults.max_steps),
+            checkpoint_every: self.checkpoint_every.unwrap_or(defaults.checkpoint_every),
             time_targets: self.time_targets_s,
             newton: NewtonSettings {
-                max_iterations: match self.newton_max_iterations {
-                    Some(m) => count("newton_max_iterations", m, "in [1, 1000]")?,
-                    None => newton.max_iterations,
-                },
+                max_iterations: self.newton_max_iterations.unwrap_or(newton.max_iterations),
                 residual_tolerance: self
                     .newton_residual_tolerance
                     .unwrap_or(newton.residual_tolerance),
@@ -258,7 +262,7 @@ pub fn check_parameters(
     ramp_time_s: f64,
     until_density: Option<f64>,
     until_time_s: Option<f64>,
-    mesh_level: Option<i64>,
+    #[pyo3(from_py_with = mesh_level_argument)] mesh_level: Option<u32>,
     grading: Option<f64>,
     exact_volume: Option<bool>,
     element: Option<&str>,
@@ -266,16 +270,16 @@ pub fn check_parameters(
     max_strain_increment: Option<f64>,
     dt_initial_s: Option<f64>,
     dt_max_s: Option<f64>,
-    max_steps: Option<i64>,
+    #[pyo3(from_py_with = max_steps_argument)] max_steps: Option<usize>,
     time_targets_s: Vec<f64>,
-    newton_max_iterations: Option<i64>,
+    #[pyo3(from_py_with = newton_max_iterations_argument)] newton_max_iterations: Option<usize>,
     newton_residual_tolerance: Option<f64>,
     contact: &str,
     tied_planes: bool,
     contact_penalty_factor: Option<f64>,
     penetration_tolerance: Option<f64>,
     contact_facets: Option<&str>,
-    checkpoint_every: Option<i64>,
+    #[pyo3(from_py_with = checkpoint_every_argument)] checkpoint_every: Option<usize>,
     material: Option<PyRef<'_, PyMaterial>>,
 ) -> PyResult<()> {
     // The core wants a stop condition; a placeholder stands in when none is
@@ -425,11 +429,6 @@ impl PySimulation {
     }
 }
 
-/// A non-negative integer argument that the core takes as an unsigned count.
-fn count(name: &str, value: i64, allowed: &str) -> PyResult<usize> {
-    usize::try_from(value).map_err(|_| parameter_error(name, value, allowed))
-}
-
 #[pymethods]
 impl PySimulation {
     #[new]
@@ -473,7 +472,7 @@ impl PySimulation {
         ramp_time_s: f64,
         until_density: Option<f64>,
         until_time_s: Option<f64>,
-        mesh_level: Option<i64>,
+        #[pyo3(from_py_with = mesh_level_argument)] mesh_level: Option<u32>,
         grading: Option<f64>,
         exact_volume: Option<bool>,
         element: Option<&str>,
@@ -481,16 +480,16 @@ impl PySimulation {
         max_strain_increment: Option<f64>,
         dt_initial_s: Option<f64>,
         dt_max_s: Option<f64>,
-        max_steps: Option<i64>,
+        #[pyo3(from_py_with = max_steps_argument)] max_steps: Option<usize>,
         time_targets_s: Vec<f64>,
-        newton_max_iterations: Option<i64>,
+        #[pyo3(from_py_with = newton_max_iterations_argument)] newton_max_iterations: Option<usize>,
         newton_residual_tolerance: Option<f64>,
         contact: &str,
         tied_planes: bool,
         contact_penalty_factor: Option<f64>,
         penetration_tolerance: Option<f64>,
         contact_facets: Option<&str>,
-        checkpoint_every: Option<i64>,
+        #[pyo3(from_py_with = checkpoint_every_argument)] checkpoint_every: Option<usize>,
         resume_from: Option<&[u8]>,
     ) -> PyResult<Self> {
         if until_density.is_none() && until_time_s.is_none() {

@@ -3,6 +3,7 @@
 //! and the paper's packings built from them.
 
 use crate::error::SolverError;
+use crate::load_path::closest_level;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -80,12 +81,63 @@ fn check_radius_aspect(radius: f64, aspect: f64) -> Result<(), SolverError> {
     check("aspect_ratio", aspect, ASPECT_RANGE, "in [0.2, 5] (c/a)")
 }
 
+/// Refuses two octants at one corner and two octants that overlap.
+///
+/// Two octants at different corners overlap exactly when the surface of
+/// one reaches inside the other (each octant fits its box, so its piece is
+/// the whole octant of its spheroid, and of two overlapping convex pieces
+/// either one holds the other or their curved surfaces cross). So the
+/// smallest level function of each over the other's surface
+/// ([`closest_level`], exact to its search's 1e-11 rad) decides, with the
+/// mesh check's slack [`FIT_TOLERANCE`]: cells whose particles touch,
+/// written to seven significant digits, pass (the level function of a
+/// touching pair is 1).
+fn check_apart(cell: &Cell) -> Result<(), SolverError> {
+    let octants = &cell.octants;
+    for (first, p) in octants.iter().enumerate() {
+        for (second, q) in octants.iter().enumerate().skip(first + 1) {
+            if p.corner == q.corner {
+                return Err(SolverError::SameCorner {
+                    cell: cell.name.clone(),
+                    first,
+                    second,
+                    corner: p.corner,
+                });
+            }
+        }
+    }
+    for (first, p) in octants.iter().enumerate() {
+        for (second, q) in octants.iter().enumerate().skip(first + 1) {
+            let into_q = closest_level(p, q, cell.lengths);
+            let into_p = closest_level(q, p, cell.lengths);
+            let (inner, outer, level) = if into_q <= into_p {
+                (first, second, into_q)
+            } else {
+                (second, first, into_p)
+            };
+            if level < 1.0 - FIT_TOLERANCE {
+                return Err(SolverError::Overlap {
+                    cell: cell.name.clone(),
+                    first,
+                    second,
+                    inner,
+                    outer,
+                    level,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 impl Cell {
     /// A cell from its box and octants, checked: positive finite lengths,
-    /// every octant inside the box (its semi-axes at most the box edges), and
-    /// a chain of touching particles from the piston to the bottom plane
-    /// ([`crate::load_path`]). Overlaps between particles are checked when
-    /// the cell is meshed.
+    /// every octant inside the box (its semi-axes at most the box edges), one
+    /// octant per corner ([`SolverError::SameCorner`]), no two octants
+    /// overlapping ([`SolverError::Overlap`], see [`check_apart`]), and a
+    /// chain of touching particles from the piston to the bottom plane
+    /// ([`crate::load_path`]). The mesh is checked for overlaps again
+    /// when the cell is meshed (its nodes against the spheroids).
     pub fn new(
         name: impl Into<String>,
         lengths: [f64; 3],
@@ -123,6 +175,7 @@ impl Cell {
             lengths,
             octants,
         };
+        check_apart(&cell)?;
         crate::load_path::check(&cell)?;
         Ok(cell)
     }
@@ -273,6 +326,132 @@ mod tests {
         let sc2 = Cell::sc2(0.05, 1.566, 1.0).unwrap();
         let (large, small) = (&sc2.octants[0], &sc2.octants[1]);
         assert!((large.a + small.a - sc2.lengths[0]).abs() < 1e-15);
+    }
+
+    fn octant(corner: [bool; 3], a: f64, c: f64) -> Octant {
+        Octant { corner, a, c }
+    }
+
+    #[test]
+    fn two_octants_at_one_corner_are_refused_by_their_indices() {
+        let o = octant([false, true, true], 0.05, 0.05);
+        let err = Cell::new("dup", [0.05; 3], vec![o.clone(), o.clone()]).unwrap_err();
+        assert_eq!(
+            err,
+            SolverError::SameCorner {
+                cell: "dup".into(),
+                first: 0,
+                second: 1,
+                corner: [false, true, true]
+            }
+        );
+        assert!(
+            err.to_string()
+                .contains("octants[0] and octants[1] are both at corner 011"),
+            "{err}"
+        );
+        // Another size at the same corner too, after a good octant.
+        let other = octant([false, true, true], 0.02, 0.03);
+        let far = octant([true, false, false], 0.01, 0.01);
+        assert!(matches!(
+            Cell::new("dup", [0.05; 3], vec![far, o, other]),
+            Err(SolverError::SameCorner {
+                first: 1,
+                second: 2,
+                ..
+            })
+        ));
+    }
+
+    #[test]
+    fn overlapping_octants_are_refused_by_their_indices() {
+        // octants[0] and [2] overlap along x by 0.02 mm; [1] is far from both.
+        let octants = vec![
+            octant([false; 3], 0.06, 0.06),
+            octant([false, true, true], 0.02, 0.02),
+            octant([true, false, false], 0.06, 0.06),
+        ];
+        let err = Cell::new("x", [0.1; 3], octants).unwrap_err();
+        let SolverError::Overlap {
+            first: 0,
+            second: 2,
+            level,
+            ..
+        } = err
+        else {
+            panic!("{err}");
+        };
+        // The surface of one reaches 0.02 mm into the other, of radius 0.06.
+        assert!((1.0 - level.sqrt() - 0.02 / 0.06).abs() < 1e-9, "{level}");
+        let message = err.to_string();
+        assert!(
+            message.contains("octants[0] and octants[2] overlap") && message.contains("33.333 %"),
+            "{message}"
+        );
+        // Spheroids: a flat octant under a tall one at the corner above it.
+        let err = Cell::new(
+            "y",
+            [0.1, 0.1, 0.1],
+            vec![
+                octant([false; 3], 0.08, 0.04),
+                octant([false, false, true], 0.03, 0.065),
+            ],
+        )
+        .unwrap_err();
+        assert!(matches!(err, SolverError::Overlap { .. }), "{err}");
+    }
+
+    /// Random cells of two or three octants, refused at construction
+    /// exactly when some node of their level-2 mesh lies inside another
+    /// octant (or, touching, never: the construction's test is the exact
+    /// surface, which the nodes sample). Either check may refuse cells the
+    /// other accepts only within a hair of touching.
+    #[test]
+    fn the_construction_check_agrees_with_the_mesh_check() {
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut uniform = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let options = crate::scene::MeshOptions {
+            level: 2,
+            ..crate::scene::MeshOptions::default()
+        };
+        let (mut refused, mut accepted) = (0, 0);
+        for _ in 0..150 {
+            let lengths = [0.1, 0.08 + 0.04 * uniform(), 0.06 + 0.06 * uniform()];
+            let count = 2 + (uniform() * 2.0) as usize;
+            let mut corners: Vec<[bool; 3]> = (0..8)
+                .map(|k| [k & 1 == 1, k & 2 == 2, k & 4 == 4])
+                .collect();
+            let octants: Vec<Octant> = (0..count)
+                .map(|_| {
+                    let corner = corners.remove((uniform() * corners.len() as f64) as usize);
+                    let a = lengths[0].min(lengths[1]) * (0.3 + 0.7 * uniform());
+                    let c = (a * (0.5 + uniform())).min(lengths[2]);
+                    octant(corner, a, c)
+                })
+                .collect();
+            let cell = Cell {
+                name: "random".into(),
+                lengths,
+                octants,
+            };
+            let apart = check_apart(&cell).is_ok();
+            let meshed = crate::scene::Scene::from_cell(&cell, &options).is_ok();
+            assert_eq!(apart, meshed, "{cell:?}");
+            if apart {
+                accepted += 1;
+            } else {
+                refused += 1;
+            }
+        }
+        assert!(
+            refused > 20 && accepted > 20,
+            "{refused} refused, {accepted} accepted"
+        );
     }
 
     #[test]

@@ -216,6 +216,18 @@ impl Constraints {
             .collect()
     }
 
+    /// The unknowns at the current contact state: the body dofs that have
+    /// an equation of their own (free, or in contact with no plane), plus
+    /// the piston's displacement.
+    pub fn unknowns(&self) -> usize {
+        self.equation_map()
+            .iter()
+            .enumerate()
+            .filter(|&(d, &m)| m == d)
+            .count()
+            + 1
+    }
+
     /// The equation of dof `d` that is not an image.
     fn own_equation(&self, d: usize) -> usize {
         if self.rules[d] == Rule::Pinned {

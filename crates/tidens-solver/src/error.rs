@@ -13,6 +13,41 @@ pub enum SolverError {
     /// A cell whose particles cannot carry the piston's load to the bottom.
     #[error("cell '{cell}': {reason}")]
     NoLoadPath { cell: String, reason: String },
+    /// Two octants of a cell at one corner: one spheroid's piece twice, or
+    /// two spheroids centred at one point (a line of a cell file written
+    /// twice, say). Indices as the octants were given.
+    #[error(
+        "cell '{cell}': octants[{first}] and octants[{second}] are both at corner {}: \
+         each corner holds one particle",
+        corner_digits(.corner)
+    )]
+    SameCorner {
+        cell: String,
+        first: usize,
+        second: usize,
+        /// The corner (true: the high end of that axis).
+        corner: [bool; 3],
+    },
+    /// Two octants of a cell that overlap (touching is allowed). Indices
+    /// as the octants were given.
+    #[error(
+        "cell '{cell}': octants[{first}] and octants[{second}] overlap (a point of the \
+         surface of octants[{inner}] lies inside octants[{outer}], {:.3} % of its radius \
+         deep along that direction; touching is allowed, to about 5e-5 %)",
+        100.0 * (1.0 - .level.sqrt())
+    )]
+    Overlap {
+        cell: String,
+        first: usize,
+        second: usize,
+        /// The octant whose surface reaches into the other.
+        inner: usize,
+        /// The octant it reaches into.
+        outer: usize,
+        /// The smallest level function of `outer` on the surface of
+        /// `inner` (1 on `outer`'s surface, 0 at its centre).
+        level: f64,
+    },
     /// A scene that this version cannot build.
     #[error("unsupported scene: {0}")]
     Unsupported(String),
@@ -37,7 +72,7 @@ pub enum SolverError {
     },
     /// A checkpoint that cannot be read or does not belong to this run.
     #[error("checkpoint: {0}")]
-    Checkpoint(String),
+    Checkpoint(#[from] CheckpointError),
     /// A broken invariant of the solver (a bug: please report it).
     #[error("internal error: {0}")]
     Internal(&'static str),
@@ -53,6 +88,87 @@ pub enum SolverError {
         time: f64,
         density: f64,
     },
+}
+
+/// What is wrong with the bytes given as a checkpoint, or with the run it
+/// is resumed into (see `crate::checkpoint` for the file's frame). The
+/// messages say what happened to the file and what to do; the caller that
+/// knows the file's path puts it in front.
+#[derive(Error, Debug, Clone, PartialEq, Eq)]
+pub enum CheckpointError {
+    /// No bytes at all.
+    #[error(
+        "empty (0 bytes): the run was stopped while it wrote its first checkpoint, \
+         or the disk was full; run the case again from the start"
+    )]
+    Empty,
+    /// Fewer bytes than the checkpoint needs: the file was cut short (a
+    /// full disk, a copy that did not finish).
+    #[error(
+        "truncated (ends after {length} of the {} bytes a checkpoint needs): the file \
+         is damaged; resume from a copy of it, or run the case again from the start",
+        needed_bytes(.needed)
+    )]
+    Truncated {
+        /// Bytes there are.
+        length: usize,
+        /// Bytes the checkpoint's header says it has, when its header is
+        /// whole.
+        needed: Option<usize>,
+    },
+    /// Not the bytes of a tidens checkpoint (no mark, no format).
+    #[error(
+        "not a tidens checkpoint (it starts neither with a checkpoint's mark nor with \
+         the format of an older one)"
+    )]
+    NotACheckpoint,
+    /// A checkpoint of another format.
+    #[error(
+        "written by another version of tidens (checkpoint format {found}, this tidens \
+         reads format {expected}); run the case again from the start"
+    )]
+    Version {
+        /// Its format.
+        found: u32,
+        /// The format this tidens writes.
+        expected: u32,
+    },
+    /// Bytes changed since they were written (a bit flipped on the disk or
+    /// in a copy), found by the hashes of the frame.
+    #[error(
+        "damaged ({detail}): the file changed after it was written; resume from a \
+         copy of it, or run the case again from the start"
+    )]
+    Damaged {
+        /// What gave it away.
+        detail: String,
+    },
+    /// A whole checkpoint of another case.
+    #[error("taken with {what}: resume it with the case it was taken with")]
+    OtherCase {
+        /// What differs, e.g. "another material".
+        what: String,
+    },
+    /// The state could not be encoded (a bug: please report it).
+    #[error("cannot be written: {detail}")]
+    Unwritable {
+        /// The encoder's reason.
+        detail: String,
+    },
+}
+
+/// A corner as three 0/1 digits, x first ("011": low x, high y, high z), as
+/// cell files write it.
+fn corner_digits(corner: &[bool; 3]) -> String {
+    corner
+        .iter()
+        .map(|&high| if high { '1' } else { '0' })
+        .collect()
+}
+
+/// The bytes a truncated checkpoint needs, in words.
+fn needed_bytes(needed: &Option<usize>) -> String {
+    needed.map_or_else(|| "more".into(), |n| n.to_string())
 }
 
 impl SolverError {

@@ -29,20 +29,22 @@ mod periodic;
 mod scene;
 mod settings;
 mod simulation;
+mod size_estimate;
 mod step_control;
 #[cfg(test)]
 mod test_support;
 
 pub use cell::{ASPECT_RANGE, Cell, DEFAULT_SIZE_RATIO, Octant, RADIUS_RANGE, SIZE_RATIO_RANGE};
 pub use checkpoint::Checkpoint;
-pub use error::{LinearError, SolverError, StepFailure};
+pub use error::{CheckpointError, LinearError, SolverError, StepFailure};
 pub use load::LoadHistory;
 pub use load_path::TOUCH_TOLERANCE;
 pub use output::{CurvePoint, FULL_DENSITY, Fields, RunStats, Status};
 pub use periodic::{ParticleImage, Periodic, PlacedSpheroid};
 pub use scene::{MAX_MESH_LEVEL, MeshOptions, Particle, Scene};
-pub use settings::{ContactOptions, HexFacets, NewtonSettings, Settings};
+pub use settings::{ContactOptions, HexFacets, MAX_NEWTON_ITERATIONS, NewtonSettings, Settings};
 pub use simulation::Simulation;
+pub use size_estimate::{BASE_BYTES, HEX8_BYTES_PER_DOF, SizeEstimate, TET10_BYTES_PER_DOF};
 pub use tidens_contact::ContactMode;
 pub use tidens_fem::ElementKind;
 pub use tidens_material::{Material, Preset};

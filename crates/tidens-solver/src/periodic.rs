@@ -166,7 +166,9 @@ fn level(s: &PlacedSpheroid, x: &[f64; 3]) -> f64 {
     across / (s.a * s.a) + along * along / (s.c * s.c)
 }
 
-fn check(
+/// The spheroids of a periodic cell, checked (positive finite box and
+/// semi-axes, centres in the box, non-zero axes), their axes normalised.
+pub(crate) fn check(
     lengths: [f64; 3],
     spheroids: &[PlacedSpheroid],
 ) -> Result<Vec<PlacedSpheroid>, SolverError> {
@@ -259,23 +261,14 @@ impl Scene {
             particles.push(crate::scene::append_piece(&mut mesh, &piece, k));
         }
         let particle_nodes = mesh.nodes.len();
-        let reach = 2.0 * spheroids.iter().map(|s| s.a.max(s.c)).fold(0.0, f64::max);
+        let reach = image_reach(&spheroids);
         let mut images = Vec::new();
         for (k, s) in spheroids.iter().enumerate() {
             let mut originals: Vec<usize> =
                 particles[k].surface.iter().flatten().copied().collect();
             originals.sort_unstable();
             originals.dedup();
-            for periods in all_periods() {
-                let centre: [f64; 3] =
-                    std::array::from_fn(|i| s.centre[i] + f64::from(periods[i]) * lengths[i]);
-                let outside: f64 = (0..3)
-                    .map(|i| (-centre[i]).max(centre[i] - lengths[i]).max(0.0).powi(2))
-                    .sum::<f64>()
-                    .sqrt();
-                if outside > s.a.max(s.c) + reach {
-                    continue;
-                }
+            for periods in image_periods(s, lengths, reach) {
                 let first = mesh.nodes.len();
                 let copies: Vec<[f64; 3]> = originals
                     .iter()
@@ -324,6 +317,30 @@ fn all_periods() -> impl Iterator<Item = [i8; 3]> {
     (0..27)
         .map(|k| [k % 3, k / 3 % 3, k / 9].map(|v| v as i8 - 1))
         .filter(|p| *p != [0, 0, 0])
+}
+
+/// How far outside the box an image's centre may lie and still be made:
+/// twice the largest bounding radius (a particle in the box can reach it).
+pub(crate) fn image_reach(spheroids: &[PlacedSpheroid]) -> f64 {
+    2.0 * spheroids.iter().map(|s| s.a.max(s.c)).fold(0.0, f64::max)
+}
+
+/// The periods by which `s` is copied into images: those that leave its
+/// centre within its bounding radius plus `reach` of the box.
+pub(crate) fn image_periods(
+    s: &PlacedSpheroid,
+    lengths: [f64; 3],
+    reach: f64,
+) -> impl Iterator<Item = [i8; 3]> {
+    all_periods().filter(move |periods| {
+        let centre: [f64; 3] =
+            std::array::from_fn(|i| s.centre[i] + f64::from(periods[i]) * lengths[i]);
+        let outside: f64 = (0..3)
+            .map(|i| (-centre[i]).max(centre[i] - lengths[i]).max(0.0).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        outside <= s.a.max(s.c) + reach
+    })
 }
 
 /// Fails when a node of a particle lies inside another particle or an

@@ -384,7 +384,9 @@ pub(crate) fn hex_piece(mesh: &HexMesh, particle: &Particle) -> HexMesh {
 
 /// Fails when a node of one particle lies inside another particle's
 /// spheroid (by more than a relative `FIT_TOLERANCE` of its level function,
-/// so cells written with rounded numbers still fit).
+/// so cells written with rounded numbers still fit). [`Cell::new`] refuses
+/// overlapping octants already; this guards a cell built field by field,
+/// and the mesh itself.
 fn check_no_overlap(
     cell: &Cell,
     mesh: &HexMesh,
@@ -402,7 +404,7 @@ fn check_no_overlap(
                 .find(|x| other.level(cell.lengths, **x) < 1.0 - FIT_TOLERANCE)
             {
                 return Err(SolverError::Unsupported(format!(
-                    "cell '{}': octants {} and {} overlap (a node of {} at {node:?} is inside {})",
+                    "cell '{}': octants[{}] and octants[{}] overlap (a node of octants[{}] at {node:?} is inside octants[{}])",
                     cell.name, p.octant, q.octant, p.octant, q.octant
                 )));
             }
@@ -569,13 +571,25 @@ mod tests {
             a: 0.6,
             c: 0.6,
         };
-        // Both reach the piston (c = Lz): the load path is there.
-        let cell = Cell::new(
-            "bad",
+        // Both reach the piston (c = Lz): the load path is there. Refused
+        // as a cell, and as a mesh when the cell is built field by field.
+        let (lengths, octants) = (
             [1.0, 1.0, 0.6],
             vec![o([false; 3]), o([true, false, false])],
-        )
-        .unwrap();
+        );
+        assert!(matches!(
+            Cell::new("bad", lengths, octants.clone()),
+            Err(SolverError::Overlap {
+                first: 0,
+                second: 1,
+                ..
+            })
+        ));
+        let cell = Cell {
+            name: "bad".into(),
+            lengths,
+            octants,
+        };
         let err = Scene::from_cell(&cell, &MeshOptions::default()).unwrap_err();
         assert!(err.to_string().contains("overlap"), "{err}");
     }
@@ -607,7 +621,16 @@ mod tests {
             c: 0.05,
         };
         let s = 0.05 * 2.0 / 3f64.sqrt() * (1.0 - 1e-4);
-        let cell = Cell::new("bcc-", [s; 3], vec![o([false; 3]), o([true; 3])]).unwrap();
+        let octants = vec![o([false; 3]), o([true; 3])];
+        assert!(matches!(
+            Cell::new("bcc-", [s; 3], octants.clone()),
+            Err(SolverError::Overlap { .. })
+        ));
+        let cell = Cell {
+            name: "bcc-".into(),
+            lengths: [s; 3],
+            octants,
+        };
         assert!(Scene::from_cell(&cell, &MeshOptions::default()).is_err());
     }
 }

@@ -5,6 +5,10 @@ use crate::load::LoadHistory;
 use serde::{Deserialize, Serialize};
 use tidens_contact::ContactMode;
 
+/// Largest [`NewtonSettings::max_iterations`] accepted: a solve that needs
+/// more has lost its way (the default is 25).
+pub const MAX_NEWTON_ITERATIONS: usize = 1000;
+
 /// Newton iteration settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct NewtonSettings {
@@ -270,7 +274,7 @@ impl Settings {
         require(
             "newton.max_iterations",
             it as f64,
-            (1..=1000).contains(&it),
+            (1..=MAX_NEWTON_ITERATIONS).contains(&it),
             "in [1, 1000]",
         )?;
         let rt = nw.residual_tolerance;

@@ -524,13 +524,7 @@ impl Simulation {
     /// Degrees of freedom: free displacement components plus the piston, at
     /// the current contact state.
     pub fn degrees_of_freedom(&self) -> usize {
-        self.constraints
-            .equation_map()
-            .iter()
-            .enumerate()
-            .filter(|&(d, &m)| m == d)
-            .count()
-            + 1
+        self.constraints.unknowns()
     }
 
     /// Box edge lengths \[mm\].
