@@ -327,3 +327,31 @@ def test_sigterm_during_the_companion_exits_143(tmp_path: Path) -> None:
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "reached_density"
     assert "interrupted" in summary["error_estimate"]["method"]["mesh"] or "SIGTERM" in summary["error_estimate"]["method"]["mesh"]
+
+
+def test_a_run_too_large_for_the_memory_is_refused_before_the_packing(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """10000 random spheres at the default level need hundreds of GB: refused
+    in one line within seconds, before the packing is made."""
+    t0 = time.perf_counter()
+    code, err = run_cli(["run", "--cell", "random", "--particles", "10000", "--stress", "10",
+                         "--until-density", "0.7", "--out", str(tmp_path / "big"), "--quiet"], capsys)
+    assert code == 2 and "needs about" in err and "GB of memory" in err and err.count("\n") == 1, err
+    assert time.perf_counter() - t0 < 30
+    assert not (tmp_path / "big").exists()
+
+
+def test_a_run_is_refused_when_its_estimate_exceeds_the_available_memory(
+    monkeypatch: pytest.MonkeyPatch, quick_case: td.Case
+) -> None:
+    from tidens_rs import case as case_module
+
+    cell = td.cells.as_periodic(td.cells.bcc())
+    c = td.Case(cell=cell, material=quick_case.material, stress_mpa=10.0, solver=quick_case.solver)
+    size = c.size()
+    monkeypatch.setattr(case_module, "available_memory_bytes", lambda: size["peak_memory_bytes"] - 1)
+    with pytest.raises(ValueError, match=f"mesh_level = 1: needs about .* GB of memory \\({size['degrees_of_freedom']} unknowns\\)"):
+        c.run(until_density=0.75)
+    monkeypatch.setattr(case_module, "available_memory_bytes", lambda: size["peak_memory_bytes"])
+    assert c.simulation(until_density=0.75).degrees_of_freedom == size["degrees_of_freedom"]

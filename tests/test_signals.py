@@ -148,16 +148,19 @@ def test_a_sweep_killed_outright_leaves_no_worker_running(tmp_path: Path) -> Non
     "command",
     [
         ["pack", "--particles", "2000", "--jam"],
-        ["run", "--cell", "random", "--particles", "10000", "--stress", "10", "--until-density", "0.9", "--quiet", "--no-error-estimate"],
+        # 300 spheres at level 1 fit in memory (about 18 GB estimated), so the
+        # run starts and packs; 10000 would be refused before the packing.
+        ["run", "--cell", "random", "--particles", "300", "--mesh-level", "1", "--stress", "10", "--until-density", "0.9",
+         "--quiet", "--no-error-estimate"],
     ],
     ids=["pack", "run"],
 )
 def test_sigterm_stops_a_packing_under_way(command: list[str], tmp_path: Path) -> None:
-    # Jamming 2000 or 10000 spheres takes minutes; the signal lands in it
-    # (the command's imports take well under the 3 s waited).
+    # Jamming 2000 spheres takes minutes, 300 several seconds; the signal
+    # lands in it (the command's imports take well under the 2 s waited).
     out = tmp_path / ("p.txt" if command[0] == "pack" else "run")
     process = subprocess.Popen([*COMMAND, *command, "--out", str(out)], stderr=subprocess.PIPE, text=True)
-    time.sleep(3.0)
+    time.sleep(2.0)
     assert process.poll() is None, process.communicate()
     sent = time.monotonic()
     process.send_signal(signal.SIGTERM)

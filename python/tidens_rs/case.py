@@ -259,6 +259,8 @@ class Case:
         """The native simulation object of this case (advance it yourself);
         with ``resume_from`` (a checkpoint's bytes), it goes on from there."""
         s = self.solver
+        if self.cell.is_periodic:
+            check_memory(self.size(), f"cell {self.cell.name!r} ({len(self.cell.particles)} particles)", s.mesh_level)
         return _interruptible(lambda: _core.Simulation(
             self.cell,
             self.material,
@@ -287,6 +289,12 @@ class Case:
             checkpoint_every=s.checkpoint_every,
             resume_from=resume_from,
         ))
+
+    def size(self) -> dict[str, int]:
+        """The run's size before it is set up: nodes, elements, unknowns
+        (``degrees_of_freedom``) and the estimated peak memory
+        (``peak_memory_bytes``), see :func:`tidens_rs._core.estimate_size`."""
+        return _core.estimate_size(self.cell, self.solver.mesh_level, self.solver.element)
 
     def as_dict(self) -> dict[str, Any]:
         """The case as plain data (``Case.from_dict`` rebuilds it)."""
@@ -596,6 +604,8 @@ class Case:
         sim.set_density_targets(pending_rho)
         pending_t = sorted(t for t in snapshot_times_s if t > sim.time_s * (1 + 1e-9))
         snapshots: list[Snapshot] = []
+        if progress:
+            print(f"tidens: {sim.degrees_of_freedom} unknowns at mesh level {self.solver.mesh_level}, {self.solver.element}", file=sys.stderr)
         bar = _progress_bar(sim.rel_density, until_density, until_time_s) if progress else None
         status = "failed"
         message: str | None = None
@@ -711,6 +721,31 @@ class Case:
         )
         stopped = error if isinstance(error, KeyboardInterrupt) else None
         return _estimate_with(result, other, error), stopped
+
+
+def available_memory_bytes() -> int | None:
+    """The memory the machine can give a new run now (Linux: MemAvailable of
+    /proc/meminfo), None where that is not known."""
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def check_memory(size: dict[str, int], what: str, mesh_level: int) -> None:
+    """ValueError, before anything is meshed, when the estimated peak
+    memory of a run (``size`` as :meth:`Case.size` gives it) exceeds what
+    the machine has available."""
+    need, have = size["peak_memory_bytes"], available_memory_bytes()
+    if have is not None and need > have:
+        raise ValueError(
+            f"{what} at mesh_level = {mesh_level}: needs about {need / 1e9:.1f} GB of memory "
+            f"({size['degrees_of_freedom']} unknowns), more than the {have / 1e9:.1f} GB available: "
+            "give fewer particles or a coarser mesh"
+        )
 
 
 def _interruptible(call: Callable[[], T]) -> T:

@@ -23,7 +23,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, NoReturn
 
-from . import cells, continuum, materials, sweep
+from . import _core, cells, continuum, materials, sweep
 from ._core import CONTACT_FACETS, CONTACT_MODES, ELEMENTS, Cell, ConvergenceError, Material, Packing, TidensError, UnsupportedError, __version__
 from .case import CHECKPOINT_FILE, DEFAULT_MESH_LEVEL, DEFAULT_TOLERANCE, FINISHED, RUN_FILE, STOP_CHECKPOINT_FILE, Case, SolverSettings, load, resume
 from .io import FolderLock, check_output_dir
@@ -234,9 +234,12 @@ def _cell(args: argparse.Namespace) -> Cell:
             raise ValueError("--periodic does not apply to --cell random: it is periodic already")
         if args.small_fraction is not None and args.size_ratio is None:
             raise ValueError("--small-fraction goes with --size-ratio (a bimodal packing)")
+        particles = 16 if args.particles is None else args.particles
+        if isinstance(particles, int) and particles >= 2:
+            _check_random_size(particles, args)
         with _PackingProgress(quiet=getattr(args, "quiet", False)) as show:
             return cells.random(
-                16 if args.particles is None else args.particles,
+                particles,
                 seed=0 if args.packing_seed is None else args.packing_seed,
                 rho0=args.rho0,
                 radius_mm=radius,
@@ -249,6 +252,18 @@ def _cell(args: argparse.Namespace) -> Cell:
         raise ValueError(f"--size-ratio applies to --cell sc2 and random only, not --cell {name}")
     cell = cells.by_name(name, radius, aspect, args.size_ratio)
     return cells.as_periodic(cell) if args.periodic else cell
+
+
+def _check_random_size(particles: int, args: argparse.Namespace) -> None:
+    """Refuses, before the packing is made, a random cell whose run would
+    not fit in memory: the size of one and of two whole spheres at the run's
+    mesh level, extrapolated to ``particles``."""
+    from .case import check_memory
+
+    level = args.mesh_level if args.mesh_level is not None else DEFAULT_MESH_LEVEL
+    one, two = (_core.estimate_size(cells.as_periodic(c), level, "hex8") for c in (cells.sc(), cells.bcc()))
+    size = {k: one[k] + (particles - 1) * (two[k] - one[k]) for k in ("degrees_of_freedom", "peak_memory_bytes")}
+    check_memory(size, f"--cell random with --particles = {particles}", level)
 
 
 def _fmt(value: float | None) -> str:

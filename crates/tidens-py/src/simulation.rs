@@ -13,7 +13,7 @@ use crate::cell::{CellKind, PyCell};
 use crate::convert::{
     columns_dict, curve_columns, fields_dict, point_dict, stats_dict, status_name,
 };
-use crate::errors::{Phase, StepError, poisoned, solver_error};
+use crate::errors::{Number, Phase, StepError, parameter_error, poisoned, solver_error};
 use crate::material::PyMaterial;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
