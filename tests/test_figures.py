@@ -107,7 +107,7 @@ def test_a_result_loaded_from_its_folder_is_the_run(tmp_path: Path) -> None:
     (tmp_path / "bad").mkdir()
     for name in ("run.json", "curve.csv", "summary.json"):
         (tmp_path / "bad" / name).write_text("{}")
-    with pytest.raises(ValueError, match="not the outputs of a run"):
+    with pytest.raises(ValueError, match="bad/run.json: not the record of a run"):
         td.load(tmp_path / "bad")
 
 
@@ -162,7 +162,8 @@ def test_the_random_packings_figure_plans_its_packings_first_and_draws_their_con
     s = stand_in.summary()
     cells = [c.strip() for c in row.strip("|").split("|")]
     assert cells[1:6] == ["1", f"{stand_in.rho0:.4f}", "6.00", "6.00", "reached_density"]
-    assert cells[10] == f"{s['continuum_times_to_density_s']['0.8']:.1f} s"
+    assert cells[10] == f"{float(stand_in.continuum().time_to_density(0.8)[0]):.1f} s"
+    assert "0.8" not in s["continuum_times_to_density_s"]  # the run stopped at 0.53
 
 
 def test_drawing_only_draws_the_runs_as_their_folders_hold_them(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -176,12 +177,17 @@ def test_drawing_only_draws_the_runs_as_their_folders_hold_them(tmp_path: Path, 
         figures.make(tmp_path, figures=["random_packings"], draw_only="yes")  # type: ignore[arg-type]
     with pytest.raises(TypeError, match="from_last_step"):
         figures.make(tmp_path, figures=["random_packings"], draw_only=True, from_last_step=1)  # type: ignore[arg-type]
-    # Nothing run yet: every run missing, none started, every figure drawn
-    # (without a warning: no empty legend).
+    # A folder of no figures' runs at all: refused, nothing drawn.
+    with pytest.raises(FileNotFoundError, match="holds no runs to draw from"):
+        figures.make(tmp_path, level=1, figures=figures.FIGURES, draw_only=True)
+    assert not list(tmp_path.glob("*.png"))
+    # The runs' folder made, nothing run yet: every run missing, none
+    # started, every figure drawn (without a warning: no empty legend).
+    folder.mkdir()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         empty = figures.make(tmp_path, level=1, figures=figures.FIGURES, draw_only=True)
-    assert {r["status"] for r in empty.runs} == {"missing"} and not folder.exists()
+    assert {r["status"] for r in empty.runs} == {"missing"} and not any(folder.iterdir())
     assert all((tmp_path / f"{name}.png").exists() for name in figures.FIGURES)
     # The sc lattice finished; the one-size packing's folder holding a run
     # killed at step 12 (the periodic sc lattice standing in for it: a

@@ -1118,7 +1118,8 @@ def _random_packings(runs: Runs, out: Path) -> tuple[list[Path], str, list[dict[
     def row(label: str, r: Result) -> str:
         s = r.summary()
         times = " | ".join(_seconds(r.time_to_density(m)) for m in marks)
-        model = " | ".join(_seconds(s["continuum_times_to_density_s"].get(f"{m:g}")) for m in marks)
+        # The model's times at every mark, also those the run has not reached yet.
+        model = " | ".join(_seconds(float(r.continuum().time_to_density(m)[0])) for m in marks)
         z_end = s.get("final_coordination_number")
         return (
             f"| {label} | {s['particles']} | {r.rho0:.4f} | {s['coordination_number']:.2f} | "
