@@ -46,6 +46,7 @@ mod error;
 pub mod facet;
 mod fold;
 pub mod gap;
+pub mod mortar;
 pub mod penetration;
 mod surface;
 
