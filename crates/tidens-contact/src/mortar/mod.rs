@@ -25,12 +25,15 @@
 //! These are the kernels only: the contact law, the state across steps
 //! and the solver's terms come on top of them.
 
+pub mod clip;
 pub mod dual;
 pub mod normals;
 pub mod quadrature;
+pub mod segment;
 pub mod trace;
 
 pub use dual::{SurfaceTestFunctions, TestBasis, TestFunctions};
+pub use segment::{PairIntegrals, integrate_pair};
 pub use trace::{AdScalar, Facet, Trace};
 
 use thiserror::Error;
