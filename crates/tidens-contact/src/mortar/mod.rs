@@ -25,16 +25,20 @@
 //! These are the kernels only: the contact law, the state across steps
 //! and the solver's terms come on top of them.
 
+pub mod broad;
 pub mod clip;
 pub mod dual;
 pub mod normals;
 pub mod quadrature;
 pub mod segment;
 pub mod trace;
+pub mod weighted_gap;
 
+pub use broad::candidate_pairs;
 pub use dual::{SurfaceTestFunctions, TestBasis, TestFunctions};
 pub use segment::{PairIntegrals, integrate_pair};
 pub use trace::{AdScalar, Facet, Trace};
+pub use weighted_gap::{Derivatives, HessianBlock, WeightedGap, weighted_gaps};
 
 use thiserror::Error;
 
