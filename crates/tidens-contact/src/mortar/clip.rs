@@ -26,9 +26,11 @@
 //!    `p + (q - p) s_p / (s_p - s_q)`, `s = (b - a) x (. - a)`. A projected
 //!    slave quad that is not convex is clipped against its two triangles
 //!    (split at its reflex corner) separately.
-//! 3. Vertices closer than [`MERGE`] times the slave's largest projected
-//!    edge to the one kept before them are dropped; a polygon of less than
-//!    [`MIN_AREA`] times the slave's projected area is no overlap.
+//! 3. Vertices closer than [`MERGE`] (1e-12) times the slave's largest
+//!    projected edge to the one kept before them are dropped (round-off
+//!    duplicates; a coarser merge makes the gaps jump, see [`MERGE`]); a
+//!    polygon of less than [`MIN_AREA`] times the slave's projected area
+//!    is no overlap.
 //! 4. Cells: with the area and centroid of the polygon `q_0 .. q_{n-1}`,
 //!
 //!    ```text
@@ -55,7 +57,16 @@ pub const FACING: f64 = 1e-12;
 
 /// Vertices of a clip polygon closer than this times the slave facet's
 /// largest projected edge are merged.
-pub const MERGE: f64 = 1e-10;
+///
+/// Dropping a vertex within `MERGE h` of the one before it moves the
+/// polygon's boundary by up to that, so the gaps jump by up to about
+/// `MERGE` of their scale where it happens (a master edge sweeping over a
+/// slave corner at a shallow angle to a slave edge). With 1e-10 (4C's
+/// order) a master grid slid over a slave (`tests/mortar_continuity.rs`)
+/// showed jumps of up to 4.9e-10 of a node's gap; with 1e-12, 8e-12. The
+/// centroid fan needs no merging (a repeated vertex makes a cell of zero
+/// area), so this only clears round-off duplicates.
+pub const MERGE: f64 = 1e-12;
 
 /// A clip polygon of less than this times the projected slave facet's
 /// area is no overlap.
