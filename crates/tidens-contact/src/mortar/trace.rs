@@ -153,8 +153,10 @@ impl<T: AdScalar> Facet<T> {
         self.trace.node_count()
     }
 
-    /// `sum_a w_a x_a` over the facet's nodes.
-    fn combine(&self, w: &[T; 4]) -> Vector3<T> {
+    /// `sum_a w_a x_a` over the facet's nodes (with `w` the shape
+    /// functions at a point, its position; with their derivatives, a
+    /// tangent).
+    pub fn interpolate(&self, w: &[T; 4]) -> Vector3<T> {
         let mut p = Vector3::from_element(T::from(0.0));
         for a in 0..self.node_count() {
             p += self.x[a] * w[a];
@@ -164,13 +166,13 @@ impl<T: AdScalar> Facet<T> {
 
     /// The position `x(xi)`.
     pub fn position(&self, xi: [T; 2]) -> Vector3<T> {
-        self.combine(&self.trace.shape(xi))
+        self.interpolate(&self.trace.shape(xi))
     }
 
     /// The parametric tangents `[x_xi, x_eta]`.
     pub fn tangents(&self, xi: [T; 2]) -> [Vector3<T>; 2] {
         let dn = self.trace.shape_derivatives(xi);
-        [0, 1].map(|d| self.combine(&dn.map(|g| g[d])))
+        [0, 1].map(|d| self.interpolate(&dn.map(|g| g[d])))
     }
 
     /// The area vector `x_xi x x_eta`: along the outward normal, of length
