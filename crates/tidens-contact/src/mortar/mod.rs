@@ -29,6 +29,7 @@ pub mod broad;
 pub mod clip;
 pub mod dual;
 pub mod normals;
+mod pair_derivatives;
 pub mod quadrature;
 pub mod segment;
 pub mod trace;

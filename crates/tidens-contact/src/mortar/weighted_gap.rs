@@ -26,17 +26,19 @@
 //! [`normal_derivatives`]. The Hessian is for exact tangents in tests:
 //! every dual number then carries an `N x N` matrix.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
-use nalgebra::{Const, DMatrix, U1, Vector3};
-use num_dual::{Dual2SVec64, DualSVec64};
+use nalgebra::Vector3;
+use rayon::prelude::*;
 
 use crate::mortar::MortarError;
+use crate::mortar::clip::clip;
 use crate::mortar::dual::SurfaceTestFunctions;
 use crate::mortar::normals::{NodeRing, nodal_normal, normal_derivatives};
 use crate::mortar::quadrature::element_rule;
-use crate::mortar::segment::{PairIntegrals, integrate_pair};
-use crate::mortar::trace::{AdScalar, Facet, Trace};
+use crate::mortar::pair_derivatives::{PairDerivatives, pair_derivatives};
+use crate::mortar::segment::integrate_pair;
+use crate::mortar::trace::{Facet, Trace};
 use crate::surface::ContactSurface;
 
 /// What to differentiate.
@@ -91,136 +93,6 @@ pub struct WeightedGap {
     pub hessian: Option<HessianBlock>,
 }
 
-/// A pair's `v_j` with derivatives: value, then by slot `j` and
-/// component `c` the gradient (and Hessian) over the pair's dofs.
-struct PairDerivatives {
-    integrals: PairIntegrals<f64>,
-    dofs: Vec<usize>,
-    gradient: [[Vec<f64>; 3]; 4],
-    hessian: Option<[[DMatrix<f64>; 3]; 4]>,
-}
-
-/// A dual number seeded as variable `i` of the pair.
-trait Seeded: AdScalar {
-    fn seed(v: f64, i: usize) -> Self;
-}
-
-impl<const N: usize> Seeded for DualSVec64<N> {
-    fn seed(v: f64, i: usize) -> Self {
-        Self::from_re(v).derivative(i)
-    }
-}
-
-impl<const N: usize> Seeded for Dual2SVec64<N> {
-    fn seed(v: f64, i: usize) -> Self {
-        Self::from_re(v).derivative(i)
-    }
-}
-
-/// The slave and master facets as variables: slave node `k`'s coordinate
-/// `c` is variable `3 k + c`, master node `l`'s is `3 n_s + 3 l + c`.
-fn seeded<T: Seeded>(s: &Facet<f64>, m: &Facet<f64>) -> (Facet<T>, Facet<T>) {
-    let (ns, nm) = (s.node_count(), m.node_count());
-    let lift = |f: &Facet<f64>, count: usize, offset: usize| Facet {
-        trace: f.trace,
-        x: std::array::from_fn(|k| {
-            Vector3::from_fn(|c, _| {
-                if k < count {
-                    T::seed(f.x[k][c], offset + 3 * k + c)
-                } else {
-                    T::from(f.x[k][c])
-                }
-            })
-        }),
-    };
-    (lift(s, ns, 0), lift(m, nm, 3 * ns))
-}
-
-fn values<T: AdScalar>(p: PairIntegrals<T>) -> PairIntegrals<f64> {
-    PairIntegrals {
-        gap: p.gap.map(|g| g.re()),
-        gap_vector: p.gap_vector.map(|v| v.map(|c| c.re())),
-        d: p.d,
-        m: p.m,
-        area: p.area,
-    }
-}
-
-fn gradient_n<const N: usize>(
-    s: &Facet<f64>,
-    m: &Facet<f64>,
-    normals: &[Vector3<f64>; 4],
-    test: &crate::mortar::TestFunctions,
-) -> Result<Option<(PairIntegrals<f64>, [[Vec<f64>; 3]; 4])>, MortarError> {
-    let (sd, md) = seeded::<DualSVec64<N>>(s, m);
-    let n = normals.map(|v| v.map(DualSVec64::<N>::from));
-    let Some(p) = integrate_pair(&sd, &md, &n, test)? else {
-        return Ok(None);
-    };
-    let g = std::array::from_fn(|j| {
-        std::array::from_fn(|c| p.gap_vector[j][c].eps.unwrap_generic(Const::<N>, U1).as_slice().to_vec())
-    });
-    Ok(Some((values(p), g)))
-}
-
-fn hessian_n<const N: usize>(
-    s: &Facet<f64>,
-    m: &Facet<f64>,
-    normals: &[Vector3<f64>; 4],
-    test: &crate::mortar::TestFunctions,
-) -> Result<Option<PairDerivatives>, MortarError> {
-    let (sd, md) = seeded::<Dual2SVec64<N>>(s, m);
-    let n = normals.map(|v| v.map(Dual2SVec64::<N>::from));
-    let Some(p) = integrate_pair(&sd, &md, &n, test)? else {
-        return Ok(None);
-    };
-    let part = |j: usize, c: usize| &p.gap_vector[j][c];
-    let gradient = std::array::from_fn(|j| {
-        std::array::from_fn(|c| part(j, c).v1.clone().unwrap_generic(U1, Const::<N>).as_slice().to_vec())
-    });
-    let hessian = std::array::from_fn(|j| {
-        std::array::from_fn(|c| {
-            let h = part(j, c).v2.clone().unwrap_generic(Const::<N>, Const::<N>);
-            DMatrix::from_fn(N, N, |a, b| h[(a, b)])
-        })
-    });
-    Ok(Some(PairDerivatives {
-        integrals: values(p),
-        dofs: Vec::new(),
-        gradient,
-        hessian: Some(hessian),
-    }))
-}
-
-/// The pair's `v_j` with derivatives over its dofs (see [`seeded`]).
-fn pair_derivatives(
-    s: &Facet<f64>,
-    m: &Facet<f64>,
-    normals: &[Vector3<f64>; 4],
-    test: &crate::mortar::TestFunctions,
-    hessian: bool,
-) -> Result<Option<PairDerivatives>, MortarError> {
-    let size = s.node_count() + m.node_count();
-    if hessian {
-        return match size {
-            6 => hessian_n::<18>(s, m, normals, test),
-            7 => hessian_n::<21>(s, m, normals, test),
-            _ => hessian_n::<24>(s, m, normals, test),
-        };
-    }
-    let r = match size {
-        6 => gradient_n::<18>(s, m, normals, test)?,
-        7 => gradient_n::<21>(s, m, normals, test)?,
-        _ => gradient_n::<24>(s, m, normals, test)?,
-    };
-    Ok(r.map(|(integrals, gradient)| PairDerivatives {
-        integrals,
-        dofs: Vec::new(),
-        gradient,
-        hessian: None,
-    }))
-}
-
 /// What the pairs bring to one slave node.
 #[derive(Default)]
 struct Sum {
@@ -233,10 +105,88 @@ struct Sum {
     m: BTreeMap<usize, f64>,
 }
 
+/// The pair (`sf`, `mf`) integrated, with its global dofs, if it overlaps.
+#[allow(clippy::too_many_arguments)]
+fn pair_contribution(
+    slave: &ContactSurface,
+    master: &ContactSurface,
+    x: &[[f64; 3]],
+    (sf, mf): (usize, usize),
+    normals: &BTreeMap<usize, Vector3<f64>>,
+    test: &SurfaceTestFunctions,
+    derivatives: Derivatives,
+) -> Result<Option<PairDerivatives>, MortarError> {
+    let s = Facet::of_surface(slave, sf, x);
+    let m = Facet::of_surface(master, mf, x);
+    let snodes = slave.facets[sf];
+    let n: [Vector3<f64>; 4] = snodes.map(|k| normals[&k]);
+    let t = &test.facets[sf];
+    let result = match derivatives {
+        Derivatives::Value => integrate_pair(&s, &m, &n, t)?.map(|integrals| PairDerivatives {
+            integrals,
+            dofs: Vec::new(),
+            gradient: Default::default(),
+            hessian: None,
+        }),
+        // Most candidates do not overlap: find out in f64 before any dual
+        // number is made.
+        _ if clip(&s, &m).is_none() => None,
+        _ => pair_derivatives(&s, &m, &n, t, derivatives == Derivatives::Hessian)?,
+    };
+    Ok(result.map(|mut p| {
+        let (ns, nm) = (s.node_count(), m.node_count());
+        let mnodes = master.facets[mf];
+        p.dofs = (0..3 * (ns + nm))
+            .map(|i| {
+                let node = if i < 3 * ns { snodes[i / 3] } else { mnodes[(i - 3 * ns) / 3] };
+                3 * node + i % 3
+            })
+            .collect();
+        p
+    }))
+}
+
+/// Adds what pair `p` of slave facet nodes `snodes` and master facet nodes
+/// `mnodes` brings to the sums of its slave nodes.
+fn accumulate(sums: &mut BTreeMap<usize, Sum>, p: &PairDerivatives, snodes: &[usize], mnodes: &[usize]) {
+    for (j, &node) in snodes.iter().enumerate() {
+        let sum = sums.entry(node).or_default();
+        sum.v += p.integrals.gap_vector[j];
+        for (k, &n) in snodes.iter().enumerate() {
+            *sum.d.entry(n).or_default() += p.integrals.d[j][k];
+        }
+        for (l, &n) in mnodes.iter().enumerate() {
+            *sum.m.entry(n).or_default() += p.integrals.m[j][l];
+        }
+        if p.dofs.is_empty() || p.gradient[j][0].is_empty() {
+            continue;
+        }
+        for (i, &dof) in p.dofs.iter().enumerate() {
+            let e = sum.dv.entry(dof).or_default();
+            for c in 0..3 {
+                e[c] += p.gradient[j][c][i];
+            }
+        }
+        if let Some(h) = &p.hessian {
+            for (a, &da) in p.dofs.iter().enumerate() {
+                for (b, &db) in p.dofs.iter().enumerate() {
+                    let e = sum.hv.entry((da, db)).or_default();
+                    for c in 0..3 {
+                        e[c] += h[j][c][(a, b)];
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// The weighted gaps of the nodes of `slave` that overlap `master` on the
 /// candidate pairs `pairs` (slave facet, master facet), node coordinates
 /// `x` \[mm\], the slave facets' test functions `test`, with the
 /// derivatives asked (module docs). Sorted by node.
+///
+/// The pairs are integrated in parallel (rayon) and summed in their
+/// order, so the result does not depend on the threads.
 pub fn weighted_gaps(
     slave: &ContactSurface,
     master: &ContactSurface,
@@ -262,125 +212,102 @@ pub fn weighted_gaps(
     let ring = NodeRing::new(slave);
     let index = |n: usize| slave.nodes.binary_search(&n).unwrap_or(0);
     let strace = Trace::of_kind(slave.kind);
-    let mut normals: BTreeMap<usize, Vector3<f64>> = BTreeMap::new();
+    // The normals (values) of the slave facets' nodes, by global node.
+    let normals: BTreeMap<usize, Vector3<f64>> = pairs
+        .iter()
+        .flat_map(|&(sf, _)| slave.facets[sf])
+        .collect::<BTreeSet<usize>>()
+        .into_iter()
+        .map(|n| (n, nodal_normal(slave, &ring, index(n), x)))
+        .collect();
+    let contributions: Vec<Option<PairDerivatives>> = pairs
+        .par_iter()
+        .map(|&pair| pair_contribution(slave, master, x, pair, &normals, test, derivatives))
+        .collect::<Result<_, _>>()?;
     let mut sums: BTreeMap<usize, Sum> = BTreeMap::new();
-    for &(sf, mf) in pairs {
-        let s = Facet::of_surface(slave, sf, x);
-        let m = Facet::of_surface(master, mf, x);
-        let snodes = slave.facets[sf];
-        let n: [Vector3<f64>; 4] = std::array::from_fn(|k| {
-            *normals
-                .entry(index(snodes[k]))
-                .or_insert_with(|| nodal_normal(slave, &ring, index(snodes[k]), x))
-        });
-        let t = &test.facets[sf];
-        let result = match derivatives {
-            Derivatives::Value => integrate_pair(&s, &m, &n, t)?.map(|integrals| PairDerivatives {
-                integrals,
-                dofs: Vec::new(),
-                gradient: Default::default(),
-                hessian: None,
-            }),
-            _ => pair_derivatives(&s, &m, &n, t, derivatives == Derivatives::Hessian)?,
-        };
-        let Some(mut p) = result else { continue };
-        let (ns, nm) = (s.node_count(), m.node_count());
-        let mnodes = master.facets[mf];
-        p.dofs = (0..3 * (ns + nm))
-            .map(|i| {
-                let node = if i < 3 * ns { snodes[i / 3] } else { mnodes[(i - 3 * ns) / 3] };
-                3 * node + i % 3
-            })
-            .collect();
-        for j in 0..ns {
-            let sum = sums.entry(snodes[j]).or_default();
-            sum.v += p.integrals.gap_vector[j];
-            for k in 0..ns {
-                *sum.d.entry(snodes[k]).or_default() += p.integrals.d[j][k];
-            }
-            for l in 0..nm {
-                *sum.m.entry(mnodes[l]).or_default() += p.integrals.m[j][l];
-            }
-            if derivatives == Derivatives::Value {
-                continue;
-            }
-            for (i, &dof) in p.dofs.iter().enumerate() {
-                let e = sum.dv.entry(dof).or_default();
-                for c in 0..3 {
-                    e[c] += p.gradient[j][c][i];
-                }
-            }
-            if let Some(h) = &p.hessian {
-                for (a, &da) in p.dofs.iter().enumerate() {
-                    for (b, &db) in p.dofs.iter().enumerate() {
-                        let e = sum.hv.entry((da, db)).or_default();
-                        for c in 0..3 {
-                            e[c] += h[j][c][(a, b)];
-                        }
-                    }
-                }
-            }
+    let (ns, nm) = (strace.node_count(), Trace::of_kind(master.kind).node_count());
+    for (&(sf, mf), p) in pairs.iter().zip(&contributions) {
+        if let Some(p) = p {
+            accumulate(&mut sums, p, &slave.facets[sf][..ns], &master.facets[mf][..nm]);
         }
     }
-    let mut out = Vec::with_capacity(sums.len());
-    for (node, sum) in sums {
-        let i = index(node);
-        let area = support_integral(slave, &ring, test, x, i, strace);
-        let mut gap = WeightedGap {
-            node,
-            gap: 0.0,
-            area,
-            normal: [0.0; 3],
-            d: sum.d.iter().map(|(&k, &v)| (k, v)).collect(),
-            m: sum.m.iter().map(|(&k, &v)| (k, v)).collect(),
-            gradient: Vec::new(),
-            hessian: None,
-        };
-        if derivatives == Derivatives::Value {
-            let n = normals[&i];
-            gap.gap = n.dot(&sum.v);
-            gap.normal = n.into();
-            out.push(gap);
-            continue;
-        }
-        let nd = normal_derivatives(slave, &ring, i, x, derivatives == Derivatives::Hessian);
-        let n = nd.normal;
+    let sums: Vec<(usize, Sum)> = sums.into_iter().collect();
+    Ok(sums
+        .into_par_iter()
+        .map(|(node, sum)| {
+            let i = index(node);
+            let area = support_integral(slave, &ring, test, x, i, strace);
+            finish(slave, &ring, x, node, i, area, sum, derivatives)
+        })
+        .collect())
+}
+
+/// The weighted gap of `node` (of index `i` in `slave.nodes`, support
+/// integral `area`) from its pairs' sums: `g_j = n_j . V_j` and the chain
+/// rule of the module docs.
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    slave: &ContactSurface,
+    ring: &NodeRing,
+    x: &[[f64; 3]],
+    node: usize,
+    i: usize,
+    area: f64,
+    sum: Sum,
+    derivatives: Derivatives,
+) -> WeightedGap {
+    let mut gap = WeightedGap {
+        node,
+        gap: 0.0,
+        area,
+        normal: [0.0; 3],
+        d: sum.d.iter().map(|(&k, &v)| (k, v)).collect(),
+        m: sum.m.iter().map(|(&k, &v)| (k, v)).collect(),
+        gradient: Vec::new(),
+        hessian: None,
+    };
+    if derivatives == Derivatives::Value {
+        let n = nodal_normal(slave, ring, i, x);
         gap.gap = n.dot(&sum.v);
         gap.normal = n.into();
-        // dg = n . dV + V . dn over the union of the pairs' and the ring's dofs.
-        let mut grad: BTreeMap<usize, f64> = sum
-            .dv
-            .iter()
-            .map(|(&dof, dv)| (dof, (0..3).map(|c| n[c] * dv[c]).sum()))
-            .collect();
-        let ring_dofs: Vec<usize> = (0..3 * nd.nodes.len()).map(|d| nd.dof(d)).collect();
-        for (r, &dof) in ring_dofs.iter().enumerate() {
-            *grad.entry(dof).or_default() += (0..3).map(|c| sum.v[c] * nd.jacobian[(c, r)]).sum::<f64>();
-        }
-        if let Some(hn) = &nd.hessian {
-            let dofs: Vec<usize> = grad.keys().copied().collect();
-            let size = dofs.len();
-            let at = |dof: usize| dofs.binary_search(&dof).unwrap_or(0);
-            let mut h = vec![0.0; size * size];
-            for (&(a, b), hv) in &sum.hv {
-                h[at(a) * size + at(b)] += (0..3).map(|c| n[c] * hv[c]).sum::<f64>();
-            }
-            for (r, &a) in ring_dofs.iter().enumerate() {
-                for (q, &b) in ring_dofs.iter().enumerate() {
-                    h[at(a) * size + at(b)] += (0..3).map(|c| sum.v[c] * hn[c][(r, q)]).sum::<f64>();
-                }
-                for (&b, dv) in &sum.dv {
-                    let cross: f64 = (0..3).map(|c| nd.jacobian[(c, r)] * dv[c]).sum();
-                    h[at(a) * size + at(b)] += cross;
-                    h[at(b) * size + at(a)] += cross;
-                }
-            }
-            gap.hessian = Some(HessianBlock { dofs, values: h });
-        }
-        gap.gradient = grad.into_iter().collect();
-        out.push(gap);
+        return gap;
     }
-    Ok(out)
+    let nd = normal_derivatives(slave, ring, i, x, derivatives == Derivatives::Hessian);
+    let n = nd.normal;
+    gap.gap = n.dot(&sum.v);
+    gap.normal = n.into();
+    // dg = n . dV + V . dn over the union of the pairs' and the ring's dofs.
+    let mut grad: BTreeMap<usize, f64> = sum
+        .dv
+        .iter()
+        .map(|(&dof, dv)| (dof, (0..3).map(|c| n[c] * dv[c]).sum()))
+        .collect();
+    let ring_dofs: Vec<usize> = (0..3 * nd.nodes.len()).map(|d| nd.dof(d)).collect();
+    for (r, &dof) in ring_dofs.iter().enumerate() {
+        *grad.entry(dof).or_default() += (0..3).map(|c| sum.v[c] * nd.jacobian[(c, r)]).sum::<f64>();
+    }
+    if let Some(hn) = &nd.hessian {
+        let dofs: Vec<usize> = grad.keys().copied().collect();
+        let size = dofs.len();
+        let at = |dof: usize| dofs.binary_search(&dof).unwrap_or(0);
+        let mut h = vec![0.0; size * size];
+        for (&(a, b), hv) in &sum.hv {
+            h[at(a) * size + at(b)] += (0..3).map(|c| n[c] * hv[c]).sum::<f64>();
+        }
+        for (r, &a) in ring_dofs.iter().enumerate() {
+            for (q, &b) in ring_dofs.iter().enumerate() {
+                h[at(a) * size + at(b)] += (0..3).map(|c| sum.v[c] * hn[c][(r, q)]).sum::<f64>();
+            }
+            for (&b, dv) in &sum.dv {
+                let cross: f64 = (0..3).map(|c| nd.jacobian[(c, r)] * dv[c]).sum();
+                h[at(a) * size + at(b)] += cross;
+                h[at(b) * size + at(a)] += cross;
+            }
+        }
+        gap.hessian = Some(HessianBlock { dofs, values: h });
+    }
+    gap.gradient = grad.into_iter().collect();
+    gap
 }
 
 /// `A_j = sum_{e at j} int_e Phi_j dA` of the node of index `i`, by each
