@@ -24,7 +24,8 @@
 //!
 //! - Tri3: `z = p_0 + xi (p_1 - p_0) + eta (p_2 - p_0)`, a 2 x 2 linear
 //!   solve;
-//! - Quad4: Newton on the bilinear map from the centre, `xi <- xi -
+//! - Quad4: Newton on the bilinear map from the inverse of its affine
+//!   part at the centre, `xi <- xi -
 //!   (dz/dxi)^-1 (z(xi) - z)`, in `f64` until the step is below
 //!   [`INVERSE_TOLERANCE`]; then `T::NDERIV` more steps in the scalar
 //!   `T`: from a converged real part each step makes one more order of
@@ -44,7 +45,7 @@ const B: f64 = 0.470_142_064_105_115_1;
 /// `(155 - sqrt 15) / 1200`.
 const WA: f64 = 0.125_939_180_544_827_15;
 /// `(155 + sqrt 15) / 1200`.
-const WB: f64 = 0.132_394_152_788_506_18;
+const WB: f64 = 0.132_394_152_788_506_2;
 
 /// The 7-point degree-5 triangle rule: barycentric coordinates and
 /// weights (summing to one: multiply by the triangle's area).
@@ -96,7 +97,10 @@ fn solve2<T: AdScalar>(u: [T; 2], v: [T; 2], r: [T; 2]) -> Option<[T; 2]> {
     if !(det.re().abs() > 0.0) {
         return None;
     }
-    Some([(r[0] * v[1] - r[1] * v[0]) / det, (u[0] * r[1] - u[1] * r[0]) / det])
+    Some([
+        (r[0] * v[1] - r[1] * v[0]) / det,
+        (u[0] * r[1] - u[1] * r[0]) / det,
+    ])
 }
 
 /// The planar map's residual `z(xi) - z` and its columns `dz/dxi`,
@@ -119,7 +123,11 @@ fn residual<T: AdScalar>(trace: Trace, p: &[[T; 2]; 4], z: [T; 2], xi: [T; 2]) -
 /// The parametric coordinates `xi` of the point `z` of the auxiliary
 /// plane on the planar map of a facet of `trace` whose projected nodes are
 /// `p` (see the module docs).
-pub fn inverse_map<T: AdScalar>(trace: Trace, p: &[[T; 2]; 4], z: [T; 2]) -> Result<[T; 2], MortarError> {
+pub fn inverse_map<T: AdScalar>(
+    trace: Trace,
+    p: &[[T; 2]; 4],
+    z: [T; 2],
+) -> Result<[T; 2], MortarError> {
     let fail = |iterations, step| MortarError::InverseMap {
         trace,
         z: z.map(|v| v.re()),
@@ -127,12 +135,17 @@ pub fn inverse_map<T: AdScalar>(trace: Trace, p: &[[T; 2]; 4], z: [T; 2]) -> Res
         step,
     };
     match trace {
-        Trace::Tri3 => solve2(sub(p[1], p[0]), sub(p[2], p[0]), sub(z, p[0]))
-            .ok_or_else(|| fail(0, f64::NAN)),
+        Trace::Tri3 => {
+            solve2(sub(p[1], p[0]), sub(p[2], p[0]), sub(z, p[0])).ok_or_else(|| fail(0, f64::NAN))
+        }
         Trace::Quad4 => {
             let pr = p.map(|q| q.map(|v| v.re()));
             let zr = z.map(|v| v.re());
-            let mut xi = [0.0; 2];
+            // Start from the inverse of the map's affine part (exact on a
+            // parallelogram): two or three steps then converge.
+            let centre = [0.0, 0.0];
+            let [f, a, b] = residual(trace, &pr, zr, centre);
+            let mut xi = solve2(a, b, f).map_or(centre, |d| sub(centre, d));
             let mut converged = false;
             let mut step = f64::INFINITY;
             for it in 0..MAX_NEWTON {
@@ -209,7 +222,10 @@ mod tests {
             }
         }
         // Degree six is not exact: the rule is the one claimed.
-        let rule: f64 = element_rule(Trace::Tri3).iter().map(|([s, _], w)| w * s.powi(6)).sum();
+        let rule: f64 = element_rule(Trace::Tri3)
+            .iter()
+            .map(|([s, _], w)| w * s.powi(6))
+            .sum();
         assert!((rule - fact(6) / fact(8)).abs() > 1e-8);
     }
 
@@ -217,7 +233,13 @@ mod tests {
     fn the_quad_rule_integrates_biquintics() {
         for p in 0..=5 {
             for q in 0..=5 {
-                let mono = |k: i32| if k % 2 == 1 { 0.0 } else { 2.0 / (k + 1) as f64 };
+                let mono = |k: i32| {
+                    if k % 2 == 1 {
+                        0.0
+                    } else {
+                        2.0 / (k + 1) as f64
+                    }
+                };
                 let rule: f64 = element_rule(Trace::Quad4)
                     .iter()
                     .map(|([s, t], w)| w * s.powi(p) * t.powi(q))
@@ -236,7 +258,10 @@ mod tests {
     fn inverse_maps_invert_the_planar_maps() {
         for (trace, p) in [
             (Trace::Quad4, quad()),
-            (Trace::Tri3, [[0.1, 0.2], [2.0, 0.3], [0.4, 1.5], [0.4, 1.5]]),
+            (
+                Trace::Tri3,
+                [[0.1, 0.2], [2.0, 0.3], [0.4, 1.5], [0.4, 1.5]],
+            ),
         ] {
             for xi in [[0.3, -0.7], [0.1, 0.2], [-0.99, 0.98], [0.0, 0.0]] {
                 let [z, _, _] = residual(trace, &p, [0.0, 0.0], xi);
@@ -252,7 +277,8 @@ mod tests {
         // Hessian against central differences of the f64 map.
         let p0 = quad();
         let z0 = [0.9, 0.7];
-        let v = SVector::<f64, 10>::from_fn(|i, _| if i < 2 { z0[i] } else { p0[(i - 2) / 2][i % 2] });
+        let v =
+            SVector::<f64, 10>::from_fn(|i, _| if i < 2 { z0[i] } else { p0[(i - 2) / 2][i % 2] });
         let split = |v: &SVector<f64, 10>| {
             let p: [[f64; 2]; 4] = std::array::from_fn(|k| [v[2 + 2 * k], v[3 + 2 * k]]);
             ([v[0], v[1]], p)
@@ -300,7 +326,11 @@ mod tests {
                         &vm,
                     );
                     let fd2 = (gp[k] - gm[k]) / (2.0 * e);
-                    assert!((fd2 - h[(i, k)]).abs() < 1e-7, "{i} {k}: {fd2} {}", h[(i, k)]);
+                    assert!(
+                        (fd2 - h[(i, k)]).abs() < 1e-7,
+                        "{i} {k}: {fd2} {}",
+                        h[(i, k)]
+                    );
                 }
             }
         }

@@ -27,7 +27,11 @@
 //! ```
 //!
 //! so that `g_j = n_j . (sum_l M_jl y_l - sum_k D_jk x_k)` (the form of
-//! Popp's thesis and Kratos; MOOSE sums the first). The gap is generic
+//! Popp's thesis and Kratos; MOOSE sums the first). With `Phi_j = sum_k
+//! A_jk N_k` ([`TestFunctions`]) the sum is taken as `v_j = sum_k A_jk u_k`,
+//! `u_k = sum_g N_k (x_m - x_s) dA_g`, and the facets' maps as polynomials
+//! in the parameters ([`Expansion`]; a triangle's Jacobians are constant):
+//! in dual numbers every product counts. The gap is generic
 //! over the scalar: its derivatives with respect to the pair's node
 //! positions (through the plane, the clip polygon, the cells, the
 //! parameters, the Jacobians) and the normals are exact. `D` and `M` are
@@ -41,7 +45,7 @@ use crate::mortar::MortarError;
 use crate::mortar::clip::{Point, clip};
 use crate::mortar::dual::TestFunctions;
 use crate::mortar::quadrature::{TRIANGLE_7, inverse_map};
-use crate::mortar::trace::{AdScalar, Facet};
+use crate::mortar::trace::{AdScalar, Expansion, Facet, Trace};
 
 /// The integrals of one pair (module docs), by the slave facet's nodes
 /// `j`, `k` and the master's `l` (a triangle's fourth entries are zero).
@@ -77,12 +81,21 @@ pub fn integrate_pair<T: AdScalar>(
         return Ok(None);
     };
     let zero = T::from(0.0);
-    let mut v = [Vector3::from_element(zero); 4];
+    // u_k = sum_g N_k(xi_g) (x_m - x_s) dA_g; v_j = sum_k A_jk u_k at the end.
+    let mut u = [Vector3::from_element(zero); 4];
     let mut d = [[0.0; 4]; 4];
     let mut m = [[0.0; 4]; 4];
     let mut area = 0.0;
     let (ns, nm) = (slave.node_count(), master.node_count());
     let n0 = overlap.plane.normal;
+    let (xs, xm) = (Expansion::of(slave), Expansion::of(master));
+    // A flat triangle's Jacobians are constant.
+    let jacobians = |xi: [T; 2]| {
+        let [ta, tb] = xs.tangents(xi);
+        let a = ta.cross(&tb);
+        a.dot(&a).sqrt() / a.dot(&n0)
+    };
+    let flat = (slave.trace == Trace::Tri3).then(|| jacobians([zero, zero]));
     for piece in &overlap.pieces {
         for cell in piece.cells() {
             let cell_area = (cell[1][0] - cell[0][0]) * (cell[2][1] - cell[0][1])
@@ -92,32 +105,37 @@ pub fn integrate_pair<T: AdScalar>(
                 let z = cell_point(&cell, l);
                 let xi = inverse_map(slave.trace, &overlap.slave, z)?;
                 let eta = inverse_map(master.trace, &overlap.master, z)?;
+                let da = cell_area * flat.unwrap_or_else(|| jacobians(xi)) * *w;
+                let weighted = (xm.position(eta) - xs.position(xi)) * da;
                 let n = slave.trace.shape(xi);
-                let dn = slave.trace.shape_derivatives(xi);
-                let ta = slave.interpolate(&dn.map(|g| g[0]));
-                let tb = slave.interpolate(&dn.map(|g| g[1]));
-                let a = ta.cross(&tb);
-                let js = a.dot(&a).sqrt();
-                let jp = a.dot(&n0);
-                let da = cell_area * js / jp * *w;
-                let nmaster = master.trace.shape(eta);
-                let gap = master.interpolate(&nmaster) - slave.interpolate(&n);
-                let phi = test.eval(&n);
+                for k in 0..ns {
+                    u[k] += weighted * n[k];
+                }
+                // D and M as values.
                 let dar = da.re();
                 area += dar;
+                let nr = n.map(|v| v.re());
+                let nmr = master.trace.shape(eta.map(|v| v.re()));
+                let phi = test.eval(&nr);
                 for j in 0..ns {
-                    v[j] += gap * (phi[j] * da);
-                    let pj = phi[j].re() * dar;
+                    let pj = phi[j] * dar;
                     for k in 0..ns {
-                        d[j][k] += pj * n[k].re();
+                        d[j][k] += pj * nr[k];
                     }
                     for k in 0..nm {
-                        m[j][k] += pj * nmaster[k].re();
+                        m[j][k] += pj * nmr[k];
                     }
                 }
             }
         }
     }
+    let v: [Vector3<T>; 4] = std::array::from_fn(|j| {
+        let mut vj = Vector3::from_element(zero);
+        for k in 0..ns {
+            vj += u[k].map(|c| c * test.coefficients[j][k]);
+        }
+        vj
+    });
     let gap = std::array::from_fn(|j| if j < ns { normals[j].dot(&v[j]) } else { zero });
     Ok(Some(PairIntegrals {
         gap,
@@ -134,25 +152,46 @@ mod tests {
     use crate::mortar::trace::Trace;
 
     fn facet(trace: Trace, x: [[f64; 3]; 4]) -> Facet<f64> {
-        Facet { trace, x: x.map(Vector3::from) }
+        Facet {
+            trace,
+            x: x.map(Vector3::from),
+        }
     }
 
     #[test]
     fn a_slave_square_under_a_larger_tilted_master_plane_gets_its_wedge() {
         // Master plane z = 1 + 0.2 x facing down, covering the unit slave
         // square: g = int N_j (1 + 0.2 x) dA on the slave.
-        let s = facet(Trace::Quad4, [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]]);
+        let s = facet(
+            Trace::Quad4,
+            [
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
+        );
         let z = |x: f64| 1.0 + 0.2 * x;
         let mf = facet(
             Trace::Quad4,
-            [[-1.0, -1.0, z(-1.0)], [-1.0, 2.0, z(-1.0)], [2.0, 2.0, z(2.0)], [2.0, -1.0, z(2.0)]],
+            [
+                [-1.0, -1.0, z(-1.0)],
+                [-1.0, 2.0, z(-1.0)],
+                [2.0, 2.0, z(2.0)],
+                [2.0, -1.0, z(2.0)],
+            ],
         );
         let normals = [Vector3::z(); 4];
         let r = integrate_pair(&s, &mf, &normals, &TestFunctions::standard(Trace::Quad4))
             .unwrap()
             .unwrap();
         // int_0^1 int_0^1 N_j (1 + 0.2 x): N_0 = (1-x)(1-y): 1/4 + 0.2/12.
-        let want = [0.25 + 0.2 / 12.0, 0.25 + 0.2 / 6.0, 0.25 + 0.2 / 6.0, 0.25 + 0.2 / 12.0];
+        let want = [
+            0.25 + 0.2 / 12.0,
+            0.25 + 0.2 / 6.0,
+            0.25 + 0.2 / 6.0,
+            0.25 + 0.2 / 12.0,
+        ];
         for j in 0..4 {
             assert!((r.gap[j] - want[j]).abs() < 1e-15, "{j}: {}", r.gap[j]);
             // The gap vectors are vertical.
@@ -170,10 +209,23 @@ mod tests {
         // The warped slave facet under a covering master: sum_k D_jk sums to
         // the slave's area by its own Gauss rule (the 3 x 3 rule is not
         // exact on a warped quad: 1e-6 relative).
-        let s = facet(Trace::Quad4, [[0.0, 0.0, 0.0], [1.0, 0.0, 0.2], [1.0, 1.0, 0.0], [0.0, 1.0, 0.2]]);
+        let s = facet(
+            Trace::Quad4,
+            [
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.2],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.2],
+            ],
+        );
         let mf = facet(
             Trace::Quad4,
-            [[-1.0, -1.0, 1.0], [-1.0, 2.0, 1.0], [2.0, 2.0, 1.0], [2.0, -1.0, 1.0]],
+            [
+                [-1.0, -1.0, 1.0],
+                [-1.0, 2.0, 1.0],
+                [2.0, 2.0, 1.0],
+                [2.0, -1.0, 1.0],
+            ],
         );
         let normals = [Vector3::z(); 4];
         let r = integrate_pair(&s, &mf, &normals, &TestFunctions::standard(Trace::Quad4))
@@ -181,13 +233,18 @@ mod tests {
             .unwrap();
         let mut exact = 0.0;
         let k = 40;
-        let g: Vec<(f64, f64)> = (0..k).map(|i| (-1.0 + (2 * i + 1) as f64 / k as f64, 2.0 / k as f64)).collect();
+        let g: Vec<(f64, f64)> = (0..k)
+            .map(|i| (-1.0 + (2 * i + 1) as f64 / k as f64, 2.0 / k as f64))
+            .collect();
         for &(a, wa) in &g {
             for &(b, wb) in &g {
                 exact += wa * wb * s.jacobian([a, b]);
             }
         }
         assert!((r.area - exact).abs() < 1e-3 * exact);
-        assert!(r.area > 1.0 + 1e-3, "the warped facet is larger than its plane's square");
+        assert!(
+            r.area > 1.0 + 1e-3,
+            "the warped facet is larger than its plane's square"
+        );
     }
 }

@@ -112,10 +112,16 @@ impl Trace {
         match self {
             Trace::Tri3 => {
                 let c = |v: f64| T::from(v);
-                [[c(-1.0), c(-1.0)], [c(1.0), c(0.0)], [c(0.0), c(1.0)], [c(0.0), c(0.0)]]
+                [
+                    [c(-1.0), c(-1.0)],
+                    [c(1.0), c(0.0)],
+                    [c(0.0), c(1.0)],
+                    [c(0.0), c(0.0)],
+                ]
             }
-            Trace::Quad4 => QUAD_CORNERS
-                .map(|[a, b]| [(t * b + 1.0) * (0.25 * a), (s * a + 1.0) * (0.25 * b)]),
+            Trace::Quad4 => {
+                QUAD_CORNERS.map(|[a, b]| [(t * b + 1.0) * (0.25 * a), (s * a + 1.0) * (0.25 * b)])
+            }
         }
     }
 }
@@ -201,6 +207,75 @@ impl<T: AdScalar> Facet<T> {
     }
 }
 
+/// A facet's map written as a polynomial in `xi`, for evaluating it at
+/// many points:
+///
+/// ```text
+/// x(xi, eta) = c + xi a + eta b + xi eta d
+/// ```
+///
+/// (Quad4: `c = sum x_k / 4`, `a = sum xi_k x_k / 4`, `b = sum eta_k x_k /
+/// 4`, `d = sum xi_k eta_k x_k / 4`; Tri3: `c = x_0`, `a = x_1 - x_0`, `b =
+/// x_2 - x_0`, `d = 0`.)
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Expansion<T: AdScalar> {
+    pub trace: Trace,
+    pub c: Vector3<T>,
+    pub a: Vector3<T>,
+    pub b: Vector3<T>,
+    pub d: Vector3<T>,
+}
+
+impl<T: AdScalar> Expansion<T> {
+    /// The expansion of `facet`'s map.
+    pub fn of(facet: &Facet<T>) -> Self {
+        let x = &facet.x;
+        match facet.trace {
+            Trace::Tri3 => Self {
+                trace: Trace::Tri3,
+                c: x[0],
+                a: x[1] - x[0],
+                b: x[2] - x[0],
+                d: Vector3::from_element(T::from(0.0)),
+            },
+            Trace::Quad4 => {
+                let sum = |w: [f64; 4]| {
+                    let mut v = Vector3::from_element(T::from(0.0));
+                    for k in 0..4 {
+                        v += x[k].map(|c| c * (0.25 * w[k]));
+                    }
+                    v
+                };
+                Self {
+                    trace: Trace::Quad4,
+                    c: sum([1.0; 4]),
+                    a: sum([-1.0, 1.0, 1.0, -1.0]),
+                    b: sum([-1.0, -1.0, 1.0, 1.0]),
+                    d: sum([1.0, -1.0, 1.0, -1.0]),
+                }
+            }
+        }
+    }
+
+    /// `x(xi)`.
+    pub fn position(&self, xi: [T; 2]) -> Vector3<T> {
+        let [s, t] = xi;
+        match self.trace {
+            Trace::Tri3 => self.c + self.a * s + self.b * t,
+            Trace::Quad4 => self.c + self.a * s + self.b * t + self.d * (s * t),
+        }
+    }
+
+    /// `[x_xi, x_eta]`.
+    pub fn tangents(&self, xi: [T; 2]) -> [Vector3<T>; 2] {
+        let [s, t] = xi;
+        match self.trace {
+            Trace::Tri3 => [self.a, self.b],
+            Trace::Quad4 => [self.a + self.d * t, self.b + self.d * s],
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -214,6 +289,22 @@ mod tests {
                 Vector3::new(1.1, 0.9, -0.1),
                 Vector3::new(-0.2, 1.2, 0.3),
             ],
+        }
+    }
+
+    #[test]
+    fn the_expansion_is_the_map() {
+        let tri = Facet {
+            trace: Trace::Tri3,
+            x: warped().x,
+        };
+        for f in [warped(), tri] {
+            let e = Expansion::of(&f);
+            for xi in [[0.3, -0.2], [0.1, 0.6], [-0.9, 0.4]] {
+                assert!((e.position(xi) - f.position(xi)).norm() < 1e-15);
+                let (t, u) = (e.tangents(xi), f.tangents(xi));
+                assert!((t[0] - u[0]).norm() < 1e-15 && (t[1] - u[1]).norm() < 1e-15);
+            }
         }
     }
 
@@ -259,8 +350,13 @@ mod tests {
         // The unit square counter-clockwise about +z: normal +z, J = 1/4.
         let square = Facet {
             trace: Trace::Quad4,
-            x: [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]]
-                .map(Vector3::from),
+            x: [
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ]
+            .map(Vector3::from),
         };
         let n = square.normal([0.3f64, -0.2]);
         assert!((n - Vector3::z()).norm() < 1e-15);
@@ -268,8 +364,13 @@ mod tests {
         // A triangle: J is twice its area.
         let tri = Facet {
             trace: Trace::Tri3,
-            x: [[0.0, 0.0, 1.0], [0.0, 2.0, 1.0], [0.0, 0.0, 3.0], [0.0, 0.0, 3.0]]
-                .map(Vector3::from),
+            x: [
+                [0.0, 0.0, 1.0],
+                [0.0, 2.0, 1.0],
+                [0.0, 0.0, 3.0],
+                [0.0, 0.0, 3.0],
+            ]
+            .map(Vector3::from),
         };
         assert!((tri.normal(tri.centre()) - Vector3::x()).norm() < 1e-15);
         assert!((tri.jacobian([0.1f64, 0.2]) - 4.0).abs() < 1e-15);

@@ -24,7 +24,10 @@
 //! `Dual2SVec64<N>` for the Hessian, `N = 3 (n_s + n_m)`: 18 to 24) with
 //! the normals held constant; `dn_j` and `d2n_j` by
 //! [`normal_derivatives`]. The Hessian is for exact tangents in tests:
-//! every dual number then carries an `N x N` matrix.
+//! every dual number then carries an `N x N` matrix, and the pairs are
+//! integrated one after another on a thread with a large stack; values
+//! and gradients pair by pair in parallel (rayon), summed in the pairs'
+//! order.
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -35,11 +38,14 @@ use crate::mortar::MortarError;
 use crate::mortar::clip::clip;
 use crate::mortar::dual::SurfaceTestFunctions;
 use crate::mortar::normals::{NodeRing, nodal_normal, normal_derivatives};
-use crate::mortar::quadrature::element_rule;
 use crate::mortar::pair_derivatives::{PairDerivatives, pair_derivatives};
+use crate::mortar::quadrature::element_rule;
 use crate::mortar::segment::integrate_pair;
 use crate::mortar::trace::{Facet, Trace};
 use crate::surface::ContactSurface;
+
+/// The stack of the thread that integrates the pairs for Hessians.
+const HESSIAN_STACK: usize = 256 << 20;
 
 /// What to differentiate.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -138,7 +144,11 @@ fn pair_contribution(
         let mnodes = master.facets[mf];
         p.dofs = (0..3 * (ns + nm))
             .map(|i| {
-                let node = if i < 3 * ns { snodes[i / 3] } else { mnodes[(i - 3 * ns) / 3] };
+                let node = if i < 3 * ns {
+                    snodes[i / 3]
+                } else {
+                    mnodes[(i - 3 * ns) / 3]
+                };
                 3 * node + i % 3
             })
             .collect();
@@ -148,7 +158,12 @@ fn pair_contribution(
 
 /// Adds what pair `p` of slave facet nodes `snodes` and master facet nodes
 /// `mnodes` brings to the sums of its slave nodes.
-fn accumulate(sums: &mut BTreeMap<usize, Sum>, p: &PairDerivatives, snodes: &[usize], mnodes: &[usize]) {
+fn accumulate(
+    sums: &mut BTreeMap<usize, Sum>,
+    p: &PairDerivatives,
+    snodes: &[usize],
+    mnodes: &[usize],
+) {
     for (j, &node) in snodes.iter().enumerate() {
         let sum = sums.entry(node).or_default();
         sum.v += p.integrals.gap_vector[j];
@@ -205,9 +220,13 @@ pub fn weighted_gaps(
             });
         }
     }
-    let too_far = |surface: &ContactSurface| surface.nodes.last().copied().filter(|&n| n >= x.len());
+    let too_far =
+        |surface: &ContactSurface| surface.nodes.last().copied().filter(|&n| n >= x.len());
     if let Some(node) = too_far(slave).or(too_far(master)) {
-        return Err(MortarError::Node { node, nodes: x.len() });
+        return Err(MortarError::Node {
+            node,
+            nodes: x.len(),
+        });
     }
     let ring = NodeRing::new(slave);
     let index = |n: usize| slave.nodes.binary_search(&n).unwrap_or(0);
@@ -220,15 +239,50 @@ pub fn weighted_gaps(
         .into_iter()
         .map(|n| (n, nodal_normal(slave, &ring, index(n), x)))
         .collect();
-    let contributions: Vec<Option<PairDerivatives>> = pairs
-        .par_iter()
-        .map(|&pair| pair_contribution(slave, master, x, pair, &normals, test, derivatives))
-        .collect::<Result<_, _>>()?;
+    let contribution = |&pair: &(usize, usize)| {
+        pair_contribution(slave, master, x, pair, &normals, test, derivatives)
+    };
+    let contributions: Vec<Option<PairDerivatives>> = if derivatives == Derivatives::Hessian {
+        // A second-order dual number carries an N x N matrix (4.6 kB at N =
+        // 24): one pair's integration needs more than a thread's default
+        // stack (2 MiB). The pairs go one after another on a thread with a
+        // large one (or, if it cannot be made, on this one).
+        let run = || {
+            pairs
+                .iter()
+                .map(contribution)
+                .collect::<Result<Vec<_>, _>>()
+        };
+        std::thread::scope(|scope| {
+            match std::thread::Builder::new()
+                .stack_size(HESSIAN_STACK)
+                .spawn_scoped(scope, run)
+            {
+                Ok(handle) => handle
+                    .join()
+                    .unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
+                Err(_) => run(),
+            }
+        })?
+    } else {
+        pairs
+            .par_iter()
+            .map(contribution)
+            .collect::<Result<_, _>>()?
+    };
     let mut sums: BTreeMap<usize, Sum> = BTreeMap::new();
-    let (ns, nm) = (strace.node_count(), Trace::of_kind(master.kind).node_count());
+    let (ns, nm) = (
+        strace.node_count(),
+        Trace::of_kind(master.kind).node_count(),
+    );
     for (&(sf, mf), p) in pairs.iter().zip(&contributions) {
         if let Some(p) = p {
-            accumulate(&mut sums, p, &slave.facets[sf][..ns], &master.facets[mf][..nm]);
+            accumulate(
+                &mut sums,
+                p,
+                &slave.facets[sf][..ns],
+                &master.facets[mf][..nm],
+            );
         }
     }
     let sums: Vec<(usize, Sum)> = sums.into_iter().collect();
@@ -284,7 +338,8 @@ fn finish(
         .collect();
     let ring_dofs: Vec<usize> = (0..3 * nd.nodes.len()).map(|d| nd.dof(d)).collect();
     for (r, &dof) in ring_dofs.iter().enumerate() {
-        *grad.entry(dof).or_default() += (0..3).map(|c| sum.v[c] * nd.jacobian[(c, r)]).sum::<f64>();
+        *grad.entry(dof).or_default() +=
+            (0..3).map(|c| sum.v[c] * nd.jacobian[(c, r)]).sum::<f64>();
     }
     if let Some(hn) = &nd.hessian {
         let dofs: Vec<usize> = grad.keys().copied().collect();
