@@ -33,11 +33,18 @@ fn cap(x: &mut Vec<[f64; 3]>, r: f64, a: f64, turn: f64, flip: bool) -> ContactS
     let first = x.len();
     for j in 0..=CELLS {
         for i in 0..=CELLS {
-            let (u, v) = (a * (2.0 * i as f64 / CELLS as f64 - 1.0), a * (2.0 * j as f64 / CELLS as f64 - 1.0));
+            let (u, v) = (
+                a * (2.0 * i as f64 / CELLS as f64 - 1.0),
+                a * (2.0 * j as f64 / CELLS as f64 - 1.0),
+            );
             let d = [u.tan(), v.tan(), 1.0];
             let l = (d[0] * d[0] + d[1] * d[1] + 1.0).sqrt();
             let (c, s) = (turn.cos(), turn.sin());
-            x.push([r * (c * d[0] - s * d[1]) / l, r * (s * d[0] + c * d[1]) / l, r / l]);
+            x.push([
+                r * (c * d[0] - s * d[1]) / l,
+                r * (s * d[0] + c * d[1]) / l,
+                r / l,
+            ]);
         }
     }
     let id = |i: usize, j: usize| first + j * (CELLS + 1) + i;
@@ -52,7 +59,15 @@ fn cap(x: &mut Vec<[f64; 3]>, r: f64, a: f64, turn: f64, flip: bool) -> ContactS
     ContactSurface::from_quads(&quads, x).expect("surface")
 }
 
-fn scene() -> (Vec<[f64; 3]>, ContactSurface, ContactSurface, Vec<(usize, usize)>) {
+/// Coordinates, slave, master, candidate pairs.
+type Scene = (
+    Vec<[f64; 3]>,
+    ContactSurface,
+    ContactSurface,
+    Vec<(usize, usize)>,
+);
+
+fn scene() -> Scene {
     let mut x = Vec::new();
     let slave = cap(&mut x, 1.0, 0.3, 0.0, false);
     let master = cap(&mut x, 1.0 - 0.01, 0.3, 0.3, true);
@@ -66,11 +81,22 @@ fn mortar(c: &mut Criterion) {
     let test = SurfaceTestFunctions::new(&slave, &x, TestBasis::Dual);
     let overlapping = pairs
         .iter()
-        .filter(|&&(a, b)| clip(&Facet::of_surface(&slave, a, &x), &Facet::of_surface(&master, b, &x)).is_some())
+        .filter(|&&(a, b)| {
+            clip(
+                &Facet::of_surface(&slave, a, &x),
+                &Facet::of_surface(&master, b, &x),
+            )
+            .is_some()
+        })
         .count();
     let cells: usize = pairs
         .iter()
-        .filter_map(|&(a, b)| clip(&Facet::of_surface(&slave, a, &x), &Facet::of_surface(&master, b, &x)))
+        .filter_map(|&(a, b)| {
+            clip(
+                &Facet::of_surface(&slave, a, &x),
+                &Facet::of_surface(&master, b, &x),
+            )
+        })
         .map(|c| c.pieces.iter().map(|p| p.vertices.len()).sum::<usize>())
         .sum();
     println!(
@@ -79,7 +105,10 @@ fn mortar(c: &mut Criterion) {
         cells as f64 / overlapping as f64
     );
     let run = |d: Derivatives| weighted_gaps(&slave, &master, &x, &pairs, &test, d).expect("gaps");
-    for (name, d) in [("value", Derivatives::Value), ("gradient", Derivatives::Gradient)] {
+    for (name, d) in [
+        ("value", Derivatives::Value),
+        ("gradient", Derivatives::Gradient),
+    ] {
         let reps = 3;
         let t = Instant::now();
         for _ in 0..reps {
@@ -95,7 +124,9 @@ fn mortar(c: &mut Criterion) {
     g.sample_size(10);
     g.throughput(Throughput::Elements(pairs.len() as u64));
     g.bench_function("value", |b| b.iter(|| black_box(run(Derivatives::Value))));
-    g.bench_function("gradient", |b| b.iter(|| black_box(run(Derivatives::Gradient))));
+    g.bench_function("gradient", |b| {
+        b.iter(|| black_box(run(Derivatives::Gradient)))
+    });
     g.finish();
     let mut g = c.benchmark_group("candidate_pairs");
     g.throughput(Throughput::Elements(slave.facets.len() as u64));

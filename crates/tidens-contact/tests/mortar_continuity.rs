@@ -43,11 +43,20 @@ impl Slide {
             &mut x,
             3,
             4,
-            |u, v| [1.5 * u, 2.0 * v, 0.04 * (3.0 * u + 1.0).sin() * (2.0 * v).cos()],
+            |u, v| {
+                [
+                    1.5 * u,
+                    2.0 * v,
+                    0.04 * (3.0 * u + 1.0).sin() * (2.0 * v).cos(),
+                ]
+            },
             false,
             triangles,
         );
-        let (a, b) = (polar(SIDE, TURN), polar(SIDE, TURN + std::f64::consts::FRAC_PI_2));
+        let (a, b) = (
+            polar(SIDE, TURN),
+            polar(SIDE, TURN + std::f64::consts::FRAC_PI_2),
+        );
         let c = [0.2, -0.1];
         let master = patch(
             &mut x,
@@ -63,7 +72,12 @@ impl Slide {
             true,
             triangles,
         );
-        Slide { x0: x, slave, master, dir: polar(1.0, 0.4) }
+        Slide {
+            x0: x,
+            slave,
+            master,
+            dir: polar(1.0, 0.4),
+        }
     }
 
     /// The coordinates with the master moved by `s` along the slide.
@@ -82,7 +96,11 @@ impl Slide {
         let x = self.at(s);
         let pairs = candidate_pairs(&self.slave, &self.master, &x, SEARCH);
         let test = SurfaceTestFunctions::new(&self.slave, &self.x0, basis);
-        let d = if slope { Derivatives::Gradient } else { Derivatives::Value };
+        let d = if slope {
+            Derivatives::Gradient
+        } else {
+            Derivatives::Value
+        };
         let g = weighted_gaps(&self.slave, &self.master, &x, &pairs, &test, d).unwrap();
         let moving: std::collections::BTreeSet<usize> = self.master.nodes.iter().copied().collect();
         g.iter()
@@ -104,7 +122,10 @@ impl Slide {
         candidate_pairs(&self.slave, &self.master, &x, SEARCH)
             .into_iter()
             .filter_map(|(a, b)| {
-                let c = clip(&Facet::of_surface(&self.slave, a, &x), &Facet::of_surface(&self.master, b, &x))?;
+                let c = clip(
+                    &Facet::of_surface(&self.slave, a, &x),
+                    &Facet::of_surface(&self.master, b, &x),
+                )?;
                 Some((a, b, c.pieces.iter().map(|p| p.vertices.len()).collect()))
             })
             .collect()
@@ -126,8 +147,13 @@ fn weighted_gaps_are_continuous_under_sliding() {
         for basis in [TestBasis::Standard, TestBasis::Dual] {
             let slide = Slide::new(triangles);
             let h = WIDTH / STEPS as f64;
-            let steps: Vec<_> = (0..=STEPS).map(|i| slide.gaps(i as f64 * h, basis, true)).collect();
-            let scale = steps.iter().flat_map(|g| g.values().map(|v| v.0.abs())).fold(0.0, f64::max);
+            let steps: Vec<_> = (0..=STEPS)
+                .map(|i| slide.gaps(i as f64 * h, basis, true))
+                .collect();
+            let scale = steps
+                .iter()
+                .flat_map(|g| g.values().map(|v| v.0.abs()))
+                .fold(0.0, f64::max);
             // Lipschitz: each g_j moves by at most (its largest slope) x h
             // (with a margin for the slope between the sub-steps).
             let mut slopes: BTreeMap<usize, f64> = BTreeMap::new();
@@ -140,10 +166,15 @@ fn weighted_gaps_are_continuous_under_sliding() {
             let mut worst_ratio = 0.0f64;
             for w in steps.windows(2) {
                 for (&n, &l) in &slopes {
-                    let change = (w[0].get(&n).map_or(0.0, |v| v.0) - w[1].get(&n).map_or(0.0, |v| v.0)).abs();
+                    let change = (w[0].get(&n).map_or(0.0, |v| v.0)
+                        - w[1].get(&n).map_or(0.0, |v| v.0))
+                    .abs();
                     let bound = 1.5 * l * h + 1e-10 * scale;
                     worst_ratio = worst_ratio.max(change / bound);
-                    assert!(change <= bound, "node {n}: {change:e} over a sub-step, bound {bound:e}");
+                    assert!(
+                        change <= bound,
+                        "node {n}: {change:e} over a sub-step, bound {bound:e}"
+                    );
                 }
             }
             // Every change of the clip polygons, bisected.
@@ -164,8 +195,12 @@ fn weighted_gaps_are_continuous_under_sliding() {
                 }
                 // A pair overlapping at both ends with other vertex counts,
                 // or a pair that starts or stops overlapping.
-                let changed = sa.iter().any(|p| sb.iter().any(|q| (p.0, p.1) == (q.0, q.1) && p.2 != q.2));
-                let keys = |s: &Vec<(usize, usize, Vec<usize>)>| s.iter().map(|t| (t.0, t.1)).collect::<Vec<_>>();
+                let changed = sa
+                    .iter()
+                    .any(|p| sb.iter().any(|q| (p.0, p.1) == (q.0, q.1) && p.2 != q.2));
+                let keys = |s: &Vec<(usize, usize, Vec<usize>)>| {
+                    s.iter().map(|t| (t.0, t.1)).collect::<Vec<_>>()
+                };
                 vertex_events += usize::from(changed);
                 pair_events += usize::from(keys(&sa) != keys(&sb));
                 while b - a > 1e-12 * WIDTH {
@@ -179,16 +214,23 @@ fn weighted_gaps_are_continuous_under_sliding() {
                 let (ga, gb) = (slide.gaps(a, basis, false), slide.gaps(b, basis, false));
                 worst_jump = worst_jump.max(largest_change(&ga, &gb) / scale);
                 for (n, own) in &node_scale {
-                    let jump = (ga.get(n).map_or(0.0, |v| v.0) - gb.get(n).map_or(0.0, |v| v.0)).abs();
+                    let jump =
+                        (ga.get(n).map_or(0.0, |v| v.0) - gb.get(n).map_or(0.0, |v| v.0)).abs();
                     worst_own = worst_own.max(jump / own);
-                    assert!(jump <= 1e-10 * own, "node {n}: a jump of {jump:e} (its scale {own:e}) at s = {a}");
+                    assert!(
+                        jump <= 1e-10 * own,
+                        "node {n}: a jump of {jump:e} (its scale {own:e}) at s = {a}"
+                    );
                 }
             }
             println!(
                 "triangles {triangles}, {basis:?}: scale {scale:.3e} mm^3; largest sub-step change {worst_ratio:.2} of its bound; \
                  {vertex_events} sub-steps with vertex-count changes, {pair_events} with overlap changes, largest change across one {worst_jump:.1e} of the scale, {worst_own:.1e} of the node's own"
             );
-            assert!(vertex_events >= 10, "only {vertex_events} vertex-count changes: the slide tests little");
+            assert!(
+                vertex_events >= 10,
+                "only {vertex_events} vertex-count changes: the slide tests little"
+            );
         }
     }
 }

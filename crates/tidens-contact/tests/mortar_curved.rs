@@ -24,7 +24,11 @@ fn cubed(r: f64, a: f64, turn: f64) -> impl Fn(f64, f64) -> [f64; 3] {
         let d = [u.tan(), v.tan(), 1.0];
         let l = (d[0] * d[0] + d[1] * d[1] + 1.0).sqrt();
         let (c, sn) = (turn.cos(), turn.sin());
-        [r * (c * d[0] - sn * d[1]) / l, r * (sn * d[0] + c * d[1]) / l, r / l]
+        [
+            r * (c * d[0] - sn * d[1]) / l,
+            r * (sn * d[0] + c * d[1]) / l,
+            r / l,
+        ]
     }
 }
 
@@ -64,7 +68,10 @@ fn the_mean_gap_between_concentric_spheres_converges_at_second_order() {
             for (k, name) in ["inner max", "boundary max", "rms"].iter().enumerate() {
                 println!(
                     "triangles {triangles}, {basis:?}, {name}: errors/delta {}; orders {:.2} {:.2} {:.2}",
-                    e.iter().map(|v| format!("{:.2e}", v[k] / DELTA)).collect::<Vec<_>>().join(" "),
+                    e.iter()
+                        .map(|v| format!("{:.2e}", v[k] / DELTA))
+                        .collect::<Vec<_>>()
+                        .join(" "),
                     order(k, 1),
                     order(k, 2),
                     order(k, 3)

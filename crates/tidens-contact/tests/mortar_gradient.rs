@@ -36,7 +36,13 @@ impl Scene {
             &mut x,
             3,
             3,
-            |u, v| [1.2 * u, 1.2 * v, 0.1 * (2.0 * u).sin() * (1.0 + v) - 0.05 * v * v],
+            |u, v| {
+                [
+                    1.2 * u,
+                    1.2 * v,
+                    0.1 * (2.0 * u).sin() * (1.0 + v) - 0.05 * v * v,
+                ]
+            },
             false,
             triangles,
         );
@@ -46,14 +52,23 @@ impl Scene {
                 p[c] += 0.04 * rng.next();
             }
         }
-        let (a, b) = (polar(1.6, 0.3), polar(1.6, 0.3 + std::f64::consts::FRAC_PI_2));
+        let (a, b) = (
+            polar(1.6, 0.3),
+            polar(1.6, 0.3 + std::f64::consts::FRAC_PI_2),
+        );
         let c = [0.6 - 0.5 * (a[0] + b[0]), 0.6 - 0.5 * (a[1] + b[1])];
         let first = x.len();
         let master = patch(
             &mut x,
             master_cells,
             master_cells,
-            |u, v| [c[0] + u * a[0] + v * b[0], c[1] + u * a[1] + v * b[1], 0.01 + 0.06 * (3.0 * u - 1.5 * v).cos()],
+            |u, v| {
+                [
+                    c[0] + u * a[0] + v * b[0],
+                    c[1] + u * a[1] + v * b[1],
+                    0.01 + 0.06 * (3.0 * u - 1.5 * v).cos(),
+                ]
+            },
             true,
             triangles,
         );
@@ -64,7 +79,13 @@ impl Scene {
         }
         let pairs = candidate_pairs(&slave, &master, &x, 0.3);
         let test = SurfaceTestFunctions::new(&slave, &x, basis);
-        Scene { x, slave, master, pairs, test }
+        Scene {
+            x,
+            slave,
+            master,
+            pairs,
+            test,
+        }
     }
 
     fn gaps(&self, x: &[[f64; 3]], d: Derivatives) -> BTreeMap<usize, WeightedGap> {
@@ -77,12 +98,19 @@ impl Scene {
 
     /// The coordinates moved by `e` times the direction `d`.
     fn moved(&self, d: &[[f64; 3]], e: f64) -> Vec<[f64; 3]> {
-        self.x.iter().zip(d).map(|(p, q)| std::array::from_fn(|c| p[c] + e * q[c])).collect()
+        self.x
+            .iter()
+            .zip(d)
+            .map(|(p, q)| std::array::from_fn(|c| p[c] + e * q[c]))
+            .collect()
     }
 
     fn direction(&self, seed: u64) -> Vec<[f64; 3]> {
         let mut rng = Lcg(seed);
-        self.x.iter().map(|_| [rng.next(), rng.next(), rng.next()]).collect()
+        self.x
+            .iter()
+            .map(|_| [rng.next(), rng.next(), rng.next()])
+            .collect()
     }
 }
 
@@ -100,12 +128,21 @@ fn gradients_match_central_differences() {
         for basis in [TestBasis::Standard, TestBasis::Dual] {
             let scene = Scene::new(triangles, basis, 4);
             let g0 = scene.gaps(&scene.x, Derivatives::Gradient);
-            let (open, closed) = (g0.values().filter(|w| w.gap > 0.0).count(), g0.values().filter(|w| w.gap < 0.0).count());
-            assert!(open > 0 && closed > 0 && g0.len() >= 12, "{open} open, {closed} closed");
+            let (open, closed) = (
+                g0.values().filter(|w| w.gap > 0.0).count(),
+                g0.values().filter(|w| w.gap < 0.0).count(),
+            );
+            assert!(
+                open > 0 && closed > 0 && g0.len() >= 12,
+                "{open} open, {closed} closed"
+            );
             let mut worst = 0.0f64;
             for seed in 1..=4 {
                 let d = scene.direction(seed);
-                let (gp, gm) = (scene.gaps(&scene.moved(&d, h), Derivatives::Value), scene.gaps(&scene.moved(&d, -h), Derivatives::Value));
+                let (gp, gm) = (
+                    scene.gaps(&scene.moved(&d, h), Derivatives::Value),
+                    scene.gaps(&scene.moved(&d, -h), Derivatives::Value),
+                );
                 for (n, w) in &g0 {
                     let fd = (gp[n].gap - gm[n].gap) / (2.0 * h);
                     let (an, scale) = along(&w.gradient, &d);
@@ -114,7 +151,10 @@ fn gradients_match_central_differences() {
                     assert!(err < 1e-7, "node {n}: {fd} against {an}");
                 }
             }
-            println!("triangles {triangles}, {basis:?}: {} nodes, largest relative difference {worst:.1e}", g0.len());
+            println!(
+                "triangles {triangles}, {basis:?}: {} nodes, largest relative difference {worst:.1e}",
+                g0.len()
+            );
         }
     }
 }
@@ -144,7 +184,10 @@ fn hessians_match_central_differences_of_the_gradients() {
         }
         for seed in 11..=12 {
             let d = scene.direction(seed);
-            let (gp, gm) = (scene.gaps(&scene.moved(&d, h), Derivatives::Gradient), scene.gaps(&scene.moved(&d, -h), Derivatives::Gradient));
+            let (gp, gm) = (
+                scene.gaps(&scene.moved(&d, h), Derivatives::Gradient),
+                scene.gaps(&scene.moved(&d, -h), Derivatives::Gradient),
+            );
             for (n, w) in &g0 {
                 let hb = w.hessian.as_ref().unwrap();
                 let fd: BTreeMap<usize, f64> = {
@@ -159,17 +202,29 @@ fn hessians_match_central_differences_of_the_gradients() {
                 };
                 let k = hb.dofs.len();
                 let hd: Vec<f64> = (0..k)
-                    .map(|a| (0..k).map(|b| hb.values[a * k + b] * d[hb.dofs[b] / 3][hb.dofs[b] % 3]).sum())
+                    .map(|a| {
+                        (0..k)
+                            .map(|b| hb.values[a * k + b] * d[hb.dofs[b] / 3][hb.dofs[b] % 3])
+                            .sum()
+                    })
                     .collect();
                 let scale = hd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
                 for (a, &dof) in hb.dofs.iter().enumerate() {
                     let err = (fd.get(&dof).copied().unwrap_or(0.0) - hd[a]).abs() / scale;
                     worst = worst.max(err);
-                    assert!(err < 1e-6, "node {n} dof {dof}: {} against {}", fd.get(&dof).copied().unwrap_or(0.0), hd[a]);
+                    assert!(
+                        err < 1e-6,
+                        "node {n} dof {dof}: {} against {}",
+                        fd.get(&dof).copied().unwrap_or(0.0),
+                        hd[a]
+                    );
                 }
                 assert!(fd.keys().all(|dof| hb.dofs.binary_search(dof).is_ok()));
             }
         }
-        println!("triangles {triangles}: Hessians of {} nodes, largest relative difference {worst:.1e}", g0.len());
+        println!(
+            "triangles {triangles}: Hessians of {} nodes, largest relative difference {worst:.1e}",
+            g0.len()
+        );
     }
 }

@@ -23,16 +23,46 @@ const TURN: f64 = 17.0 * std::f64::consts::PI / 180.0;
 
 /// The slave grid at z = 0 (normal +z) and a master square of side `side`
 /// centred over the slave's centre at z = `delta`, facing down.
-fn scene(delta: f64, side: f64, slave_tris: bool, master_tris: bool) -> (Vec<[f64; 3]>, ContactSurface, ContactSurface) {
+fn scene(
+    delta: f64,
+    side: f64,
+    slave_tris: bool,
+    master_tris: bool,
+) -> (Vec<[f64; 3]>, ContactSurface, ContactSurface) {
     let mut x = Vec::new();
-    let slave = patch(&mut x, 3, 4, plane([0.0; 3], [LX, 0.0, 0.0], [0.0, LY, 0.0]), false, slave_tris);
-    let (a, b) = (polar(side, TURN), polar(side, TURN + std::f64::consts::FRAC_PI_2));
-    let c = [0.5 * LX - 0.5 * (a[0] + b[0]), 0.5 * LY - 0.5 * (a[1] + b[1]), delta];
+    let slave = patch(
+        &mut x,
+        3,
+        4,
+        plane([0.0; 3], [LX, 0.0, 0.0], [0.0, LY, 0.0]),
+        false,
+        slave_tris,
+    );
+    let (a, b) = (
+        polar(side, TURN),
+        polar(side, TURN + std::f64::consts::FRAC_PI_2),
+    );
+    let c = [
+        0.5 * LX - 0.5 * (a[0] + b[0]),
+        0.5 * LY - 0.5 * (a[1] + b[1]),
+        delta,
+    ];
     let master = patch(&mut x, 5, 5, plane(c, a, b), true, master_tris);
     (x, slave, master)
 }
 
-fn run(delta: f64, side: f64, st: bool, mt: bool, basis: TestBasis) -> (Vec<[f64; 3]>, ContactSurface, ContactSurface, Vec<WeightedGap>) {
+fn run(
+    delta: f64,
+    side: f64,
+    st: bool,
+    mt: bool,
+    basis: TestBasis,
+) -> (
+    Vec<[f64; 3]>,
+    ContactSurface,
+    ContactSurface,
+    Vec<WeightedGap>,
+) {
     let (x, s, m) = scene(delta, side, st, mt);
     let g = gaps(&s, &m, &x, basis, 0.05, Derivatives::Gradient);
     (x, s, m, g)
@@ -77,7 +107,11 @@ fn overlap_integral(x: &[[f64; 3]], m: &ContactSurface, l: usize) -> f64 {
     let mut total = 0.0;
     for f in m.facets.iter().filter(|f| f.contains(&l)) {
         let count = if tri { 3 } else { 4 };
-        let c: Vec<[f64; 2]> = f[..count].iter().rev().map(|&n| [x[n][0], x[n][1]]).collect();
+        let c: Vec<[f64; 2]> = f[..count]
+            .iter()
+            .rev()
+            .map(|&n| [x[n][0], x[n][1]])
+            .collect();
         let rect = vec![[0.0, 0.0], [LX, 0.0], [LX, LY], [0.0, LY]];
         let poly = clip_xy(rect, &c);
         if poly.len() < 3 {
@@ -86,15 +120,24 @@ fn overlap_integral(x: &[[f64; 3]], m: &ContactSurface, l: usize) -> f64 {
         // The facet's affine map from its first node: x = y0 + s e1 + t e2.
         let y = |k: usize| [x[f[k]][0], x[f[k]][1]];
         let (e1, e2) = if tri {
-            ([y(1)[0] - y(0)[0], y(1)[1] - y(0)[1]], [y(2)[0] - y(0)[0], y(2)[1] - y(0)[1]])
+            (
+                [y(1)[0] - y(0)[0], y(1)[1] - y(0)[1]],
+                [y(2)[0] - y(0)[0], y(2)[1] - y(0)[1]],
+            )
         } else {
-            ([y(1)[0] - y(0)[0], y(1)[1] - y(0)[1]], [y(3)[0] - y(0)[0], y(3)[1] - y(0)[1]])
+            (
+                [y(1)[0] - y(0)[0], y(1)[1] - y(0)[1]],
+                [y(3)[0] - y(0)[0], y(3)[1] - y(0)[1]],
+            )
         };
         let det = e1[0] * e2[1] - e1[1] * e2[0];
         let corner = f.iter().position(|&n| n == l).unwrap();
         let shape = |p: [f64; 2]| {
             let d = [p[0] - y(0)[0], p[1] - y(0)[1]];
-            let (s, t) = ((d[0] * e2[1] - d[1] * e2[0]) / det, (e1[0] * d[1] - e1[1] * d[0]) / det);
+            let (s, t) = (
+                (d[0] * e2[1] - d[1] * e2[0]) / det,
+                (e1[0] * d[1] - e1[1] * d[0]) / det,
+            );
             if tri {
                 [1.0 - s - t, s, t][corner]
             } else {
@@ -115,8 +158,18 @@ fn overlap_integral(x: &[[f64; 3]], m: &ContactSurface, l: usize) -> f64 {
 /// `d Area / d x_k` of the slave rectangle for its node at `p`.
 fn area_gradient(p: [f64; 3]) -> [f64; 2] {
     let h = 0.5;
-    let on = |v: f64, l: f64| if (v - l).abs() < 1e-12 { 1.0 } else if v.abs() < 1e-12 { -1.0 } else { 0.0 };
-    let half = |v: f64, l: f64| (if v > 1e-12 { 0.5 * h } else { 0.0 }) + (if v < l - 1e-12 { 0.5 * h } else { 0.0 });
+    let on = |v: f64, l: f64| {
+        if (v - l).abs() < 1e-12 {
+            1.0
+        } else if v.abs() < 1e-12 {
+            -1.0
+        } else {
+            0.0
+        }
+    };
+    let half = |v: f64, l: f64| {
+        (if v > 1e-12 { 0.5 * h } else { 0.0 }) + (if v < l - 1e-12 { 0.5 * h } else { 0.0 })
+    };
     [on(p[0], LX) * half(p[1], LY), on(p[1], LY) * half(p[0], LX)]
 }
 
@@ -129,13 +182,19 @@ fn a_uniform_gap_is_measured_exactly_and_a_uniform_pressure_is_transmitted_exact
             for basis in [TestBasis::Standard, TestBasis::Dual] {
                 for delta in [0.01, -0.013] {
                     let (x, s, m, g) = run(delta, 2.6, st, mt, basis);
-                    let case = format!("slave tris {st}, master tris {mt}, {basis:?}, delta {delta}");
+                    let case =
+                        format!("slave tris {st}, master tris {mt}, {basis:?}, delta {delta}");
                     // Every slave node, each with g_j / A_j = delta.
                     assert_eq!(g.len(), s.nodes.len(), "{case}");
                     for w in &g {
                         let err = (w.gap / w.area - delta).abs() / delta.abs();
                         worst[0] = worst[0].max(err);
-                        assert!(err < 1e-12, "{case}: node {} reads {}", w.node, w.gap / w.area);
+                        assert!(
+                            err < 1e-12,
+                            "{case}: node {} reads {}",
+                            w.node,
+                            w.gap / w.area
+                        );
                     }
                     // sum_j D_jk = int N_k dA (the tributary areas).
                     let mut dsum: BTreeMap<usize, f64> = BTreeMap::new();
@@ -163,12 +222,16 @@ fn a_uniform_gap_is_measured_exactly_and_a_uniform_pressure_is_transmitted_exact
                         assert!(err < 1e-12, "{case}: M column {l}: {got} against {want}");
                     }
                     let total: f64 = msum.values().sum();
-                    let moment: [f64; 3] = std::array::from_fn(|c| msum.iter().map(|(&l, &v)| v * x[l][c]).sum());
+                    let moment: [f64; 3] =
+                        std::array::from_fn(|c| msum.iter().map(|(&l, &v)| v * x[l][c]).sum());
                     let area = LX * LY;
                     let want = [0.5 * LX * area, 0.5 * LY * area, delta * area];
                     assert!((total - area).abs() < 1e-12 * area, "{case}");
                     for c in 0..3 {
-                        assert!((moment[c] - want[c]).abs() < 1e-12 * area, "{case}: moment {c}");
+                        assert!(
+                            (moment[c] - want[c]).abs() < 1e-12 * area,
+                            "{case}: moment {c}"
+                        );
                     }
                     // Forces f = p grad(sum_j g_j).
                     let mut f: BTreeMap<usize, f64> = BTreeMap::new();
@@ -184,13 +247,22 @@ fn a_uniform_gap_is_measured_exactly_and_a_uniform_pressure_is_transmitted_exact
                         // in-plane: p delta dArea/dx_k (zero inside).
                         let err = (force(k, 2) + p * s.areas[i]).abs();
                         let da = area_gradient(x[k]);
-                        let err = err.max((force(k, 0) - p * delta * da[0]).abs()).max((force(k, 1) - p * delta * da[1]).abs());
+                        let err = err
+                            .max((force(k, 0) - p * delta * da[0]).abs())
+                            .max((force(k, 1) - p * delta * da[1]).abs());
                         worst[3] = worst[3].max(err / (p * area));
-                        assert!(err < tol, "{case}: slave force at {k}: {:?}", [0, 1, 2].map(|c| force(k, c)));
+                        assert!(
+                            err < tol,
+                            "{case}: slave force at {k}: {:?}",
+                            [0, 1, 2].map(|c| force(k, c))
+                        );
                     }
                     for &l in &m.nodes {
                         let want = p * msum.get(&l).copied().unwrap_or(0.0);
-                        let err = (force(l, 2) - want).abs().max(force(l, 0).abs()).max(force(l, 1).abs());
+                        let err = (force(l, 2) - want)
+                            .abs()
+                            .max(force(l, 0).abs())
+                            .max(force(l, 1).abs());
                         worst[3] = worst[3].max(err / (p * area));
                         assert!(err < tol, "{case}: master force at {l}");
                     }
@@ -216,7 +288,10 @@ fn where_the_master_covers_a_support_only_partly_the_node_reads_the_covered_shar
         let delta = 0.02;
         let (_, _, _, standard) = run(delta, 1.8, st, false, TestBasis::Standard);
         let (_, _, _, dual) = run(delta, 1.8, st, false, TestBasis::Dual);
-        assert_eq!(standard.iter().map(|w| w.node).collect::<Vec<_>>(), dual.iter().map(|w| w.node).collect::<Vec<_>>());
+        assert_eq!(
+            standard.iter().map(|w| w.node).collect::<Vec<_>>(),
+            dual.iter().map(|w| w.node).collect::<Vec<_>>()
+        );
         let (mut full, mut part) = (0, 0);
         for (ws, wd) in standard.iter().zip(&dual) {
             // Between flat parallel surfaces g_j = delta int_overlap Phi_j

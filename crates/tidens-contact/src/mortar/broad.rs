@@ -31,7 +31,10 @@ fn facet_box(facet: &Facet<f64>, grow: f64) -> Aabb {
             hi[c] = hi[c].max(p[c] + grow);
         }
     }
-    Aabb::new(PVector::new(lo[0], lo[1], lo[2]), PVector::new(hi[0], hi[1], hi[2]))
+    Aabb::new(
+        PVector::new(lo[0], lo[1], lo[2]),
+        PVector::new(hi[0], hi[1], hi[2]),
+    )
 }
 
 fn overlap(a: &Aabb, b: &Aabb) -> bool {
@@ -118,7 +121,13 @@ mod tests {
         // Too far apart: none.
         assert!(candidate_pairs(&slave, &master, &x, 0.01).is_empty());
         // The same orientation: none face each other.
-        let same = ContactSurface::from_quads(&mq.iter().map(|q| [q[0], q[3], q[2], q[1]]).collect::<Vec<_>>(), &x).unwrap();
+        let same = ContactSurface::from_quads(
+            &mq.iter()
+                .map(|q| [q[0], q[3], q[2], q[1]])
+                .collect::<Vec<_>>(),
+            &x,
+        )
+        .unwrap();
         assert!(candidate_pairs(&slave, &same, &x, 0.1).is_empty());
     }
 }

@@ -206,7 +206,11 @@ fn clip_edge<T: AdScalar>(subject: &[Point<T>], a: &Point<T>, b: &Point<T>) -> V
 /// `subject` clipped by the convex counter-clockwise polygon `clipper`,
 /// near-duplicate vertices merged (within `merge`); None if fewer than
 /// three are left.
-fn clip_convex<T: AdScalar>(subject: &[Point<T>], clipper: &[Point<T>], merge: f64) -> Option<Vec<Point<T>>> {
+fn clip_convex<T: AdScalar>(
+    subject: &[Point<T>],
+    clipper: &[Point<T>],
+    merge: f64,
+) -> Option<Vec<Point<T>>> {
     let mut poly = subject.to_vec();
     for i in 0..clipper.len() {
         if poly.len() < 3 {
@@ -288,11 +292,17 @@ mod tests {
     use super::*;
 
     fn facet(trace: crate::mortar::Trace, x: [[f64; 3]; 4]) -> Facet<f64> {
-        Facet { trace, x: x.map(Vector3::from) }
+        Facet {
+            trace,
+            x: x.map(Vector3::from),
+        }
     }
 
     fn unit_square(z: f64) -> Facet<f64> {
-        facet(crate::mortar::Trace::Quad4, [[0.0, 0.0, z], [1.0, 0.0, z], [1.0, 1.0, z], [0.0, 1.0, z]])
+        facet(
+            crate::mortar::Trace::Quad4,
+            [[0.0, 0.0, z], [1.0, 0.0, z], [1.0, 1.0, z], [0.0, 1.0, z]],
+        )
     }
 
     /// A square of half-width `h` centred at `(cx, cy)` at height `z`,
@@ -332,7 +342,10 @@ mod tests {
             .map(|[a, b, c]| 0.5 * cross(&sub(&b, &a), &sub(&c, &a)))
             .sum();
         assert!((cells - p.area).abs() < 1e-15);
-        assert!(p.cells().all(|[a, b, c]| cross(&sub(&b, &a), &sub(&c, &a)) > 0.0));
+        assert!(
+            p.cells()
+                .all(|[a, b, c]| cross(&sub(&b, &a), &sub(&c, &a)) > 0.0)
+        );
     }
 
     #[test]
@@ -351,7 +364,12 @@ mod tests {
         // A dart: corner 3 is reflex.
         let s = facet(
             crate::mortar::Trace::Quad4,
-            [[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [2.0, 2.0, 0.0], [1.5, 0.5, 0.0]],
+            [
+                [0.0, 0.0, 0.0],
+                [2.0, 0.0, 0.0],
+                [2.0, 2.0, 0.0],
+                [1.5, 0.5, 0.0],
+            ],
         );
         let c = clip(&s, &master(1.0, 1.0, 3.0, 0.1, 0.5)).unwrap();
         assert_eq!(c.pieces.len(), 2);
@@ -365,17 +383,31 @@ mod tests {
         use nalgebra::SVector;
         use num_dual::{DualNum, DualSVec64};
         // The area of the octagon against the master's turn angle.
-        let area = |angle: f64| clip(&unit_square(0.0), &master(0.5, 0.5, 0.5, angle, 0.2)).unwrap().pieces[0].area;
+        let area = |angle: f64| {
+            clip(&unit_square(0.0), &master(0.5, 0.5, 0.5, angle, 0.2))
+                .unwrap()
+                .pieces[0]
+                .area
+        };
         let a0 = 0.6;
         let (_, g) = num_dual::gradient(
             |v: SVector<DualSVec64<1>, 1>| {
                 let (c, s) = (v[0].cos(), v[0].sin());
                 let corner = |u: f64, w: f64| {
-                    Vector3::new(c * u - s * w + 0.5, s * u + c * w + 0.5, DualSVec64::from(0.2))
+                    Vector3::new(
+                        c * u - s * w + 0.5,
+                        s * u + c * w + 0.5,
+                        DualSVec64::from(0.2),
+                    )
                 };
                 let m = Facet {
                     trace: crate::mortar::Trace::Quad4,
-                    x: [corner(-0.5, -0.5), corner(-0.5, 0.5), corner(0.5, 0.5), corner(0.5, -0.5)],
+                    x: [
+                        corner(-0.5, -0.5),
+                        corner(-0.5, 0.5),
+                        corner(0.5, 0.5),
+                        corner(0.5, -0.5),
+                    ],
                 };
                 let s = unit_square(0.0).map(|p| p.map(DualSVec64::from));
                 clip(&s, &m).unwrap().pieces[0].area

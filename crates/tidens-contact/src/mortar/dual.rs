@@ -53,7 +53,10 @@ impl TestFunctions {
         for j in 0..trace.node_count() {
             a[j][j] = 1.0;
         }
-        Self { trace, coefficients: a }
+        Self {
+            trace,
+            coefficients: a,
+        }
     }
 
     /// The dual functions of `facet` (its geometry used only for a quad).
@@ -83,7 +86,10 @@ impl TestFunctions {
                 }
             }
         }
-        Self { trace, coefficients: a }
+        Self {
+            trace,
+            coefficients: a,
+        }
     }
 
     /// The test functions of `basis` for `facet`.
@@ -151,14 +157,33 @@ mod tests {
     use nalgebra::Vector3;
 
     fn facet(trace: Trace, x: [[f64; 3]; 4]) -> Facet<f64> {
-        Facet { trace, x: x.map(Vector3::from) }
+        Facet {
+            trace,
+            x: x.map(Vector3::from),
+        }
     }
 
     /// A flat, non-affine quad (no two sides parallel) and a warped one.
     fn quads() -> [Facet<f64>; 2] {
         [
-            facet(Trace::Quad4, [[0.0, 0.0, 0.0], [2.0, 0.3, 0.0], [1.7, 1.9, 0.0], [-0.2, 1.1, 0.0]]),
-            facet(Trace::Quad4, [[0.0, 0.0, 0.0], [2.0, 0.3, 0.4], [1.7, 1.9, -0.1], [-0.2, 1.1, 0.3]]),
+            facet(
+                Trace::Quad4,
+                [
+                    [0.0, 0.0, 0.0],
+                    [2.0, 0.3, 0.0],
+                    [1.7, 1.9, 0.0],
+                    [-0.2, 1.1, 0.0],
+                ],
+            ),
+            facet(
+                Trace::Quad4,
+                [
+                    [0.0, 0.0, 0.0],
+                    [2.0, 0.3, 0.4],
+                    [1.7, 1.9, -0.1],
+                    [-0.2, 1.1, 0.3],
+                ],
+            ),
         ]
     }
 
@@ -185,8 +210,14 @@ mod tests {
         // Gauss-Legendre 5 points (degree 9): independent of the 3 x 3 rule
         // the coefficients come from, exact on the flat quad.
         let g5: Vec<(f64, f64)> = {
-            let (a, b) = ((5.0 - 2.0 * (10.0f64 / 7.0).sqrt()).sqrt() / 3.0, (5.0 + 2.0 * (10.0f64 / 7.0).sqrt()).sqrt() / 3.0);
-            let (wa, wb) = ((322.0 + 13.0 * 70f64.sqrt()) / 900.0, (322.0 - 13.0 * 70f64.sqrt()) / 900.0);
+            let (a, b) = (
+                (5.0 - 2.0 * (10.0f64 / 7.0).sqrt()).sqrt() / 3.0,
+                (5.0 + 2.0 * (10.0f64 / 7.0).sqrt()).sqrt() / 3.0,
+            );
+            let (wa, wb) = (
+                (322.0 + 13.0 * 70f64.sqrt()) / 900.0,
+                (322.0 - 13.0 * 70f64.sqrt()) / 900.0,
+            );
             vec![(-b, wb), (-a, wa), (0.0, 128.0 / 225.0), (a, wa), (b, wb)]
         };
         for (i, q) in quads().iter().enumerate() {
@@ -200,7 +231,11 @@ mod tests {
             for j in 0..4 {
                 for k in 0..4 {
                     let want = if j == k { d[j] } else { 0.0 };
-                    assert!((r[j][k] - want).abs() < 1e-13 * scale, "{i} {j} {k}: {}", r[j][k]);
+                    assert!(
+                        (r[j][k] - want).abs() < 1e-13 * scale,
+                        "{i} {j} {k}: {}",
+                        r[j][k]
+                    );
                 }
             }
             for xi in [[0.3, -0.4], [-1.0, 1.0], [0.9, 0.2]] {
@@ -215,7 +250,15 @@ mod tests {
 
     #[test]
     fn the_square_has_the_textbook_coefficients() {
-        let q = facet(Trace::Quad4, [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]]);
+        let q = facet(
+            Trace::Quad4,
+            [
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [1.0, 1.0, 0.0],
+                [0.0, 1.0, 0.0],
+            ],
+        );
         let a = TestFunctions::dual(&q).coefficients;
         let row = [4.0, -2.0, 1.0, -2.0];
         for j in 0..4 {
@@ -227,7 +270,15 @@ mod tests {
 
     #[test]
     fn triangle_dual_functions_are_four_n_minus_one() {
-        let t = facet(Trace::Tri3, [[0.1, 0.0, 0.3], [2.0, 0.5, 0.0], [0.3, 1.4, 0.2], [0.3, 1.4, 0.2]]);
+        let t = facet(
+            Trace::Tri3,
+            [
+                [0.1, 0.0, 0.3],
+                [2.0, 0.5, 0.0],
+                [0.3, 1.4, 0.2],
+                [0.3, 1.4, 0.2],
+            ],
+        );
         let phi = TestFunctions::dual(&t);
         let (d, _) = mass_matrices(&t);
         for ([s, tt], _) in element_rule(Trace::Tri3) {

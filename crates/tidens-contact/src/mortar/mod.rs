@@ -59,7 +59,9 @@ pub enum MortarError {
         step: f64,
     },
     /// A candidate pair names a facet that is not there.
-    #[error("candidate pair (slave facet {slave}, master facet {master}): must be below ({slave_facets}, {master_facets})")]
+    #[error(
+        "candidate pair (slave facet {slave}, master facet {master}): must be below ({slave_facets}, {master_facets})"
+    )]
     Pair {
         slave: usize,
         master: usize,

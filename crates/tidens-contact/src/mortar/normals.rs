@@ -106,13 +106,22 @@ where
 
 /// The unit normal of the node of index `i` in `surface.nodes`, node
 /// coordinates `x` \[mm\].
-pub fn nodal_normal(surface: &ContactSurface, ring: &NodeRing, i: usize, x: &[[f64; 3]]) -> Vector3<f64> {
+pub fn nodal_normal(
+    surface: &ContactSurface,
+    ring: &NodeRing,
+    i: usize,
+    x: &[[f64; 3]],
+) -> Vector3<f64> {
     normal_with(surface, ring, i, |n| Vector3::from(x[n]))
 }
 
 /// The unit nodal normals of all of `surface`'s nodes (in the order of
 /// `surface.nodes`) with the node coordinates `x` \[mm\].
-pub fn nodal_normals(surface: &ContactSurface, ring: &NodeRing, x: &[[f64; 3]]) -> Vec<Vector3<f64>> {
+pub fn nodal_normals(
+    surface: &ContactSurface,
+    ring: &NodeRing,
+    x: &[[f64; 3]],
+) -> Vec<Vector3<f64>> {
     (0..surface.nodes.len())
         .map(|i| nodal_normal(surface, ring, i, x))
         .collect()
@@ -207,7 +216,9 @@ mod tests {
             }
         }
         let quads: Vec<[usize; 4]> = (0..2)
-            .flat_map(|j| (0..2).map(move |i| [3 * j + i, 3 * j + i + 1, 3 * j + i + 4, 3 * j + i + 3]))
+            .flat_map(|j| {
+                (0..2).map(move |i| [3 * j + i, 3 * j + i + 1, 3 * j + i + 4, 3 * j + i + 3])
+            })
             .collect();
         let tris: Vec<[usize; 3]> = quads
             .iter()
@@ -285,7 +296,9 @@ mod tests {
         }
         let n = Vector3::new(1.0, 2.0, 2.0) / 3.0;
         let quads: Vec<[usize; 4]> = (0..2)
-            .flat_map(|j| (0..2).map(move |i| [3 * j + i, 3 * j + i + 1, 3 * j + i + 4, 3 * j + i + 3]))
+            .flat_map(|j| {
+                (0..2).map(move |i| [3 * j + i, 3 * j + i + 1, 3 * j + i + 4, 3 * j + i + 3])
+            })
             .collect();
         let s = ContactSurface::from_quads(&quads, &x).unwrap();
         let ring = NodeRing::new(&s);

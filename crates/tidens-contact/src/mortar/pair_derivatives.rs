@@ -18,13 +18,17 @@ use crate::mortar::dual::TestFunctions;
 use crate::mortar::segment::{PairIntegrals, integrate_pair};
 use crate::mortar::trace::{AdScalar, Facet};
 
+/// By slot `j` and component `c`, the gradient of `v_jc` over the pair's
+/// variables.
+type Gradients = [[Vec<f64>; 3]; 4];
+
 /// A pair's `v_j` with derivatives: value, then by slot `j` and
 /// component `c` the gradient (and Hessian) over the pair's dofs.
 pub(crate) struct PairDerivatives {
     pub(crate) integrals: PairIntegrals<f64>,
     /// Global dofs of the variables (filled in by the caller).
     pub(crate) dofs: Vec<usize>,
-    pub(crate) gradient: [[Vec<f64>; 3]; 4],
+    pub(crate) gradient: Gradients,
     pub(crate) hessian: Option<[[DMatrix<f64>; 3]; 4]>,
 }
 
@@ -79,14 +83,20 @@ fn gradient_n<const N: usize>(
     m: &Facet<f64>,
     normals: &[Vector3<f64>; 4],
     test: &TestFunctions,
-) -> Result<Option<(PairIntegrals<f64>, [[Vec<f64>; 3]; 4])>, MortarError> {
+) -> Result<Option<(PairIntegrals<f64>, Gradients)>, MortarError> {
     let (sd, md) = seeded::<DualSVec64<N>>(s, m);
     let n = normals.map(|v| v.map(DualSVec64::<N>::from));
     let Some(p) = integrate_pair(&sd, &md, &n, test)? else {
         return Ok(None);
     };
     let g = std::array::from_fn(|j| {
-        std::array::from_fn(|c| p.gap_vector[j][c].eps.unwrap_generic(Const::<N>, U1).as_slice().to_vec())
+        std::array::from_fn(|c| {
+            p.gap_vector[j][c]
+                .eps
+                .unwrap_generic(Const::<N>, U1)
+                .as_slice()
+                .to_vec()
+        })
     });
     Ok(Some((values(p), g)))
 }
@@ -104,11 +114,17 @@ fn hessian_n<const N: usize>(
     };
     let part = |j: usize, c: usize| &p.gap_vector[j][c];
     let gradient = std::array::from_fn(|j| {
-        std::array::from_fn(|c| part(j, c).v1.clone().unwrap_generic(U1, Const::<N>).as_slice().to_vec())
+        std::array::from_fn(|c| {
+            part(j, c)
+                .v1
+                .unwrap_generic(U1, Const::<N>)
+                .as_slice()
+                .to_vec()
+        })
     });
     let hessian = std::array::from_fn(|j| {
         std::array::from_fn(|c| {
-            let h = part(j, c).v2.clone().unwrap_generic(Const::<N>, Const::<N>);
+            let h = part(j, c).v2.unwrap_generic(Const::<N>, Const::<N>);
             DMatrix::from_fn(N, N, |a, b| h[(a, b)])
         })
     });
@@ -148,4 +164,3 @@ pub(crate) fn pair_derivatives(
         hessian: None,
     }))
 }
-

@@ -3,7 +3,9 @@
 #![allow(dead_code)]
 
 use tidens_contact::ContactSurface;
-use tidens_contact::mortar::{Derivatives, SurfaceTestFunctions, TestBasis, WeightedGap, weighted_gaps};
+use tidens_contact::mortar::{
+    Derivatives, SurfaceTestFunctions, TestBasis, WeightedGap, weighted_gaps,
+};
 
 /// A patch of `nx x ny` cells of the map `(u, v) in [0, 1]^2 -> point`,
 /// nodes appended to `x`; the quads counter-clockwise in `(u, v)` (normal
@@ -36,7 +38,7 @@ pub fn patch(
             .iter()
             .enumerate()
             .flat_map(|(c, q)| {
-                if (c / nx + c % nx) % 2 == 0 {
+                if (c / nx + c % nx).is_multiple_of(2) {
                     [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
                 } else {
                     [[q[1], q[2], q[3]], [q[1], q[3], q[0]]]
@@ -79,7 +81,10 @@ pub struct Lcg(pub u64);
 
 impl Lcg {
     pub fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((self.0 >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     }
 }
