@@ -12,7 +12,7 @@
 //! where a master overlaps), in the current geometry, without
 //! derivatives (the caller freezes it per step). `V_j` depends on the
 //! nodes of the pairs' facets, `n_j` on the nodes of `j`'s ring
-//! ([`normals`]); the chain rule gives
+//! ([`normals`](crate::mortar::normals)); the chain rule gives
 //!
 //! ```text
 //! dg_j = n_j . dV_j + V_j . dn_j
