@@ -5,7 +5,7 @@
 //! parry bounding volume hierarchy (`Bvh::from_leaves`, `intersect_aabb`):
 //! a pair is a candidate when some point of the one facet lies within
 //! `d` of the other's box in every coordinate. Then the orientation
-//! filter of [`facing`](crate::mortar::clip::facing): the master's centre normal must point
+//! filter of [`facing`]: the master's centre normal must point
 //! against the slave's (`n_m . n0 < -FACING`), the test the clip makes
 //! again, so that a pair it drops here would have no overlap there.
 //!
