@@ -3,8 +3,8 @@
 //! Each slave facet's axis-aligned box, grown by the search distance `d`
 //! on every side, is tested against the master facets' boxes held in a
 //! parry bounding volume hierarchy (`Bvh::from_leaves`, `intersect_aabb`):
-//! a pair is a candidate when some point of the one facet lies within
-//! `d` of the other's box in every coordinate. Then the orientation
+//! a pair is a candidate when the two boxes are at most `d` apart along
+//! every axis. Then the orientation
 //! filter of [`facing`]: the master's centre normal must point
 //! against the slave's (`n_m . n0 < -FACING`), the test the clip makes
 //! again, so that a pair it drops here would have no overlap there.
