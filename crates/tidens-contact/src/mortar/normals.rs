@@ -83,8 +83,9 @@ fn neighbours(trace: Trace, c: usize) -> (usize, usize) {
 }
 
 /// The unit normal of the node of index `i` in `surface.nodes` with the
-/// node coordinates `at(global node)`.
-fn normal_with<T>(
+/// node coordinates `at(global node)`, for any `num-dual` scalar (the
+/// coordinates as dual numbers give the normal's derivatives).
+pub fn normal_with<T>(
     surface: &ContactSurface,
     ring: &NodeRing,
     i: usize,
