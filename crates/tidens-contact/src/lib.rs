@@ -41,11 +41,17 @@
 //!   ([`ParticleContact::repair`]) the nodes that slid off their facet or
 //!   came near another surface are paired afresh, and at convergence
 //!   Newton goes on if one touches.
+//!
+//! [`mod@mortar`] holds the kernels of mortar (segment-to-segment) contact:
+//! weighted gaps of a slave surface's nodes against a master surface,
+//! their mortar integrals and exact derivatives. [`ParticleContact`] does
+//! not use them yet.
 
 mod error;
 pub mod facet;
 mod fold;
 pub mod gap;
+pub mod mortar;
 pub mod penetration;
 mod surface;
 
