@@ -271,12 +271,14 @@ struct Across {
 pub struct StateSnapshot {
     state: Vec<Vec<NodeStates>>,
     pairing: Vec<Vec<NodePairing>>,
+    mortar: Option<mortar::MortarCheckpoint>,
 }
 
 impl StateSnapshot {
     /// How many slave-master pairs carry a multiplier or a tie.
     pub fn len(&self) -> usize {
-        self.state.iter().flatten().map(Vec::len).sum()
+        self.state.iter().flatten().map(Vec::len).sum::<usize>()
+            + self.mortar.as_ref().map_or(0, mortar::MortarCheckpoint::len)
     }
 
     pub fn is_empty(&self) -> bool {
@@ -339,6 +341,8 @@ struct NodeState {
 pub struct ContactCheckpoint {
     state: Vec<Vec<NodeStates>>,
     pairing: Vec<Vec<NodePairing>>,
+    #[serde(default)]
+    mortar: Option<mortar::MortarCheckpoint>,
 }
 
 /// Contact between the surfaces of a scene's particles.
@@ -363,6 +367,10 @@ pub struct ParticleContact {
     /// ([`ParticleContact::pair`]): the touch force leaves them out.
     #[serde(skip)]
     pressed_at_start: std::collections::HashSet<(usize, usize)>,
+    /// The mortar formulation ([`ParticleContact::mortar`]), which then
+    /// does all the work: the node-to-facet state above stays empty.
+    #[serde(skip)]
+    mortar: Option<Box<mortar::MortarContact>>,
 }
 
 /// The contact contributions at one configuration.
@@ -476,7 +484,49 @@ impl ParticleContact {
             pairing,
             touch_force: None,
             pressed_at_start: Default::default(),
+            mortar: None,
         })
+    }
+
+    /// Contact among `surfaces` by the mortar formulation (see
+    /// [`mortar::MortarContact`]) with test functions `basis`: weighted
+    /// gaps, no node-to-facet links. Frictionless only.
+    pub fn mortar(
+        surfaces: Vec<ContactSurface>,
+        settings: ContactSettings,
+        basis: mortar::TestBasis,
+    ) -> Result<Self, ContactError> {
+        let m = mortar::MortarContact::new(surfaces.clone(), settings, basis)?;
+        let mut contact = Self::new(surfaces, settings)?;
+        contact.mortar = Some(Box::new(m));
+        Ok(contact)
+    }
+
+    /// Whether this is the mortar formulation.
+    pub fn is_mortar(&self) -> bool {
+        self.mortar.is_some()
+    }
+
+    /// The mortar formulation's state, if it is that one.
+    pub fn as_mortar(&self) -> Option<&mortar::MortarContact> {
+        self.mortar.as_deref()
+    }
+
+    /// The dofs a term couples in the tangent for the rest of the step: the
+    /// slave node with every facet around its master facet, or (mortar)
+    /// the term's dofs with every candidate master facet of its node.
+    pub fn coupling_dofs(&self, t: &ContactTerm) -> Vec<usize> {
+        if let Some(m) = &self.mortar {
+            return m.coupling_dofs(t);
+        }
+        let master = &self.surfaces[t.master.0];
+        let mut dofs: Vec<usize> = t.dofs[..3].to_vec();
+        for &f in master.ring(t.master.1) {
+            dofs.extend(master.facets[f].iter().flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]));
+        }
+        dofs.sort_unstable();
+        dofs.dedup();
+        dofs
     }
 
     pub fn surfaces(&self) -> &[ContactSurface] {
@@ -635,6 +685,9 @@ impl ParticleContact {
     /// surfaces that press somewhere now (by their multipliers) are left
     /// out of it for the step.
     pub fn pair(&mut self, x: &[f64]) {
+        if let Some(m) = &mut self.mortar {
+            return m.pair(x);
+        }
         self.drop_left(x, true);
         self.pair_unpaired(x);
         self.pressed_at_start = self
@@ -694,6 +747,31 @@ impl ParticleContact {
     /// spheroids by up to the facets' sagitta, so every contact would
     /// otherwise start open. Returns how many node-surface pairs it closed.
     pub fn close_initial_gaps(&mut self, x: &[f64], limit: f64) -> usize {
+        if self.mortar.is_some() {
+            // The nodes that touch the other surface pointwise (their
+            // distance to its facets below `limit`) read closed: their mean
+            // gap over their support is O(h^2 / R) open where two curved
+            // surfaces touch at a point (bcc at level 1: 1.2e-2 R).
+            self.pair_unpaired(x);
+            let mut touching = std::collections::BTreeSet::new();
+            for (s, nodes) in self.pairing.iter().enumerate() {
+                for (k, links) in nodes.iter().enumerate() {
+                    for l in links {
+                        let gap = -self.measure(x, s, k, l).1;
+                        if gap < limit {
+                            touching.insert((s, k, l.master));
+                        }
+                    }
+                }
+            }
+            for nodes in &mut self.pairing {
+                nodes.iter_mut().for_each(Vec::clear);
+            }
+            return self
+                .mortar
+                .as_mut()
+                .map_or(0, |m| m.close_touching(x, &touching));
+        }
         self.pair_unpaired(x);
         let mut closed = Vec::new();
         for (s, nodes) in self.pairing.iter().enumerate() {
@@ -723,6 +801,9 @@ impl ParticleContact {
     /// inside (or far off) the surface it is really on; the step that
     /// follows would start from that state with the true penetration.
     pub fn repair(&mut self, x: &[f64]) -> usize {
+        if let Some(m) = &mut self.mortar {
+            return m.repair(x);
+        }
         self.pair_afresh(x).0
     }
 
@@ -732,6 +813,9 @@ impl ParticleContact {
     /// convergence. Returns whether any link changed (then the contact
     /// terms at `x` are not those of the links they were evaluated with).
     pub fn relink(&mut self, x: &[f64]) -> bool {
+        if let Some(m) = &mut self.mortar {
+            return m.relink(x);
+        }
         self.pair_afresh(x).1
     }
 
@@ -786,6 +870,9 @@ impl ParticleContact {
     /// its edges if need be; Newton on the projection from the facet's
     /// centre), in the configuration `x`.
     pub fn measure_on(&self, x: &[f64], s: usize, k: usize, m: usize, f: usize) -> ([f64; 2], f64) {
+        if f == mortar::ANY_FACET {
+            return ([0.0; 2], 0.0);
+        }
         let link = Link {
             master: m,
             facet: f,
@@ -1091,6 +1178,9 @@ impl ParticleContact {
     /// `3 * node + i`), with tangents if asked, for the paired and tied
     /// slave nodes.
     pub fn evaluate(&self, x: &[f64], with_tangent: bool) -> ContactEvaluation {
+        if let Some(m) = &self.mortar {
+            return m.evaluate(x, with_tangent);
+        }
         let work: Vec<(usize, usize)> = self
             .surfaces
             .iter()
@@ -1463,6 +1553,9 @@ impl ParticleContact {
     /// nodes add their gap times the penalty. Returns the largest
     /// penetration before the update \[mm\].
     pub fn augment(&mut self, x: &[f64], eval: &ContactEvaluation) -> f64 {
+        if let Some(m) = &mut self.mortar {
+            return m.augment(eval);
+        }
         let eps = self.settings.penalty;
         let mut active: std::collections::BTreeSet<(usize, usize, usize)> = Default::default();
         let mut folds: std::collections::BTreeSet<(usize, usize, usize, usize)> =
@@ -1517,6 +1610,9 @@ impl ParticleContact {
     /// the material point of the facet it touches (call once per converged
     /// step).
     pub fn tie_closed(&mut self, eval: &ContactEvaluation) {
+        if self.mortar.is_some() {
+            return;
+        }
         if self.settings.mode != ContactMode::Tied {
             return;
         }
@@ -1538,6 +1634,7 @@ impl ParticleContact {
         ContactCheckpoint {
             state: self.state.clone(),
             pairing: self.pairing.clone(),
+            mortar: self.mortar.as_ref().map(|m| m.checkpoint()),
         }
     }
 
@@ -1556,6 +1653,15 @@ impl ParticleContact {
                 "a checkpoint of other contact surfaces".into(),
             ));
         }
+        match (&mut self.mortar, &c.mortar) {
+            (Some(m), Some(saved)) => m.restore_checkpoint(saved)?,
+            (None, None) => {}
+            _ => {
+                return Err(ContactError::Surface(
+                    "a checkpoint of the other contact formulation".into(),
+                ));
+            }
+        }
         self.state = c.state.clone();
         self.pairing = c.pairing.clone();
         Ok(())
@@ -1565,11 +1671,16 @@ impl ParticleContact {
         StateSnapshot {
             state: self.state.clone(),
             pairing: self.pairing.clone(),
+            mortar: self.mortar.as_ref().map(|m| m.checkpoint()),
         }
     }
 
     pub fn restore(&mut self, snapshot: &StateSnapshot) {
         self.state.clone_from(&snapshot.state);
         self.pairing.clone_from(&snapshot.pairing);
+        if let (Some(m), Some(saved)) = (&mut self.mortar, &snapshot.mortar) {
+            // The same surfaces: it fits.
+            let _ = m.restore_checkpoint(saved);
+        }
     }
 }

@@ -216,17 +216,7 @@ impl Assembler {
         constraints: &Constraints,
     ) {
         for t in &contact.terms {
-            let master = &particles.surfaces()[t.master.0];
-            let mut dofs: Vec<usize> = t.dofs[..3].to_vec();
-            for &f in master.ring(t.master.1) {
-                dofs.extend(
-                    master.facets[f]
-                        .iter()
-                        .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]),
-                );
-            }
-            dofs.sort_unstable();
-            dofs.dedup();
+            let dofs = particles.coupling_dofs(t);
             let mut clique = constraints.clique(&dofs);
             clique.sort_unstable();
             self.contact_cliques.insert(clique);

@@ -42,7 +42,9 @@ pub use load_path::TOUCH_TOLERANCE;
 pub use output::{CurvePoint, FULL_DENSITY, Fields, RunStats, Status};
 pub use periodic::{ParticleImage, Periodic, PlacedSpheroid};
 pub use scene::{MAX_MESH_LEVEL, MeshOptions, Particle, Scene};
-pub use settings::{ContactOptions, HexFacets, MAX_NEWTON_ITERATIONS, NewtonSettings, Settings};
+pub use settings::{
+    ContactFormulation, ContactOptions, HexFacets, MAX_NEWTON_ITERATIONS, NewtonSettings, Settings,
+};
 pub use simulation::Simulation;
 pub use size_estimate::{BASE_BYTES, HEX8_BYTES_PER_DOF, SizeEstimate, TET10_BYTES_PER_DOF};
 pub use tidens_contact::ContactMode;

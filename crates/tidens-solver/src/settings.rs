@@ -68,6 +68,24 @@ pub struct ContactOptions {
     /// (default) or bilinear patches.
     #[serde(default)]
     pub hex_facets: HexFacets,
+    /// How particle contact is enforced: node to facet, or mortar.
+    #[serde(default)]
+    pub formulation: ContactFormulation,
+}
+
+/// The discretisation of particle contact.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ContactFormulation {
+    /// Each slave node against the master facet it projects on (penalty
+    /// and augmented Lagrangian on its penetration; see `tidens_contact`).
+    #[default]
+    NodeToFacet,
+    /// Weighted gaps integrated over the slave surface against the master
+    /// surface, segment by segment (`tidens_contact::mortar`): forces
+    /// vary smoothly as nodes slide, and the contact patch test is passed.
+    /// Frictionless only; the master surface of a hexahedral particle is
+    /// its bilinear faces whatever `hex_facets` says.
+    Mortar,
 }
 
 /// The master facets a node of another particle is measured against, on
@@ -98,6 +116,7 @@ impl Default for ContactOptions {
             penalty_factor: 10.0,
             penetration_tolerance: 1e-4,
             hex_facets: HexFacets::Triangles,
+            formulation: ContactFormulation::NodeToFacet,
         }
     }
 }

@@ -11,7 +11,7 @@ use crate::linear::LinearSolver;
 use crate::newton::{FactorKey, Solved};
 use crate::output::{CurvePoint, RunStats, Status};
 use crate::scene::Scene;
-use crate::settings::{HexFacets, Settings};
+use crate::settings::{ContactFormulation, HexFacets, Settings};
 use crate::step_control::StepController;
 use tidens_contact::{ContactEvaluation, ContactSettings, ContactSurface, ParticleContact};
 use tidens_fem::ElementKind;
@@ -127,6 +127,12 @@ pub(crate) const TOUCH_STIFFNESS_CAP: f64 = 50.0;
 /// 3 and 7 Newton iterations.
 pub(crate) const INITIAL_GAP_CLOSURE: f64 = 0.1;
 
+/// Mortar contact in a cell of octants: nodes open at the start by a mean
+/// gap below this many times the penetration tolerance read closed (see
+/// where it is used). The next nodes out on bcc are open by 1.2e-2 R at
+/// level 1 and 1.8e-3 R at level 3.
+const MORTAR_TOUCH_CLOSURE: f64 = 10.0;
+
 /// The largest contact penalty, in units of f sigma / h: the penalty factor
 /// times E / h unless that is larger (E/sigma above 1e5 at the default
 /// factor). A penalty that scales with a stiff material's E makes contact
@@ -145,10 +151,12 @@ fn particle_contact(
     if scene.particles.len() < 2 && scene.periodic.is_none() {
         return Ok(None);
     }
+    let mortar = settings.contact.formulation == ContactFormulation::Mortar;
     let surfaces = scene
         .particles
         .iter()
         .map(|p| match scene.element() {
+            ElementKind::Hex8 if mortar => ContactSurface::from_quads(&p.surface, scene.nodes()),
             ElementKind::Hex8 => match settings.contact.hex_facets {
                 HexFacets::Triangles => {
                     ContactSurface::from_quads_as_triangles(&p.surface, scene.nodes())
@@ -178,9 +186,8 @@ fn particle_contact(
     let c = &settings.contact;
     // The stress the cell feels [MPa].
     let stress = settings.load.knockdown * settings.load.stress;
-    let contact = ParticleContact::new(
-        surfaces.into_iter().chain(images).collect(),
-        ContactSettings {
+    let all: Vec<ContactSurface> = surfaces.into_iter().chain(images).collect();
+    let settings = ContactSettings {
             mode: c.mode,
             penalty: (c.penalty_factor * material.young / h).min(PENALTY_CAP * stress / h),
             search_distance: h,
@@ -189,8 +196,12 @@ fn particle_contact(
             // per Newton step against it; below the default touch stiffness
             // (1e-3 of the penalty) for E/sigma > 5e3 (the base case: 4e3).
             touch_stiffness_cap: TOUCH_STIFFNESS_CAP * stress / h,
-        },
-    )
+    };
+    let contact = if mortar {
+        ParticleContact::mortar(all, settings, tidens_contact::mortar::TestBasis::Standard)
+    } else {
+        ParticleContact::new(all, settings)
+    }
     .map_err(|e| SolverError::Unsupported(e.to_string()))?;
     Ok(Some(contact))
 }
@@ -357,10 +368,21 @@ impl Simulation {
         };
         let mut assembler = Assembler::new(&body, &constraints);
         let mut contact = particle_contact(scene, &material, &settings)?;
-        if let (Some(c), Some(_)) = (contact.as_mut(), &scene.periodic) {
+        let touching_limit = match (&contact, &scene.periodic) {
             // Whole particles placed to touch meet at points, between the
             // meshes' nodes: their contacts are closed at the start.
-            let limit = INITIAL_GAP_CLOSURE * c.settings().search_distance;
+            (Some(c), Some(_)) => Some(INITIAL_GAP_CLOSURE * c.settings().search_distance),
+            // The weighted gap of a node at the point where two curved
+            // surfaces touch is the mean gap over its support, open by
+            // O(h^2 / R) (bcc at level 1: 3.4e-4 R; at level 3 7e-6 R);
+            // read closed, the load passes there at once, as it does
+            // through the touching node of node-to-facet contact.
+            (Some(c), None) if c.is_mortar() => {
+                Some(MORTAR_TOUCH_CLOSURE * settings.contact.penetration_tolerance * scene.radius)
+            }
+            _ => None,
+        };
+        if let (Some(c), Some(limit)) = (contact.as_mut(), touching_limit) {
             let x0: Vec<f64> = scene.nodes().iter().flatten().copied().collect();
             let closed = c.close_initial_gaps(&x0, limit);
             if crate::newton::debug_enabled() {
@@ -482,6 +504,17 @@ impl Simulation {
         // Patterns of assemblers forgotten at checkpoint steps, and this one's.
         s.pattern_rebuilds = self.stats.pattern_rebuilds + self.assembler.pattern_rebuilds();
         s
+    }
+
+    /// The particle contact of the scene, if it has one.
+    pub fn particle_contact(&self) -> Option<&ParticleContact> {
+        self.contact.as_ref()
+    }
+
+    /// The current node coordinates \[mm\] (flat, three per node) at the
+    /// last converged step, periodic images included.
+    pub fn coordinates(&self) -> Vec<f64> {
+        self.current_coordinates(&self.state.u)
     }
 
     /// The particle-contact terms of the last converged step (one per slave

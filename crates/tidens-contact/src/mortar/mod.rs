@@ -27,6 +27,7 @@
 
 pub mod broad;
 pub mod clip;
+pub mod contact;
 pub mod dual;
 pub mod normals;
 mod pair_derivatives;
@@ -36,6 +37,7 @@ pub mod trace;
 pub mod weighted_gap;
 
 pub use broad::candidate_pairs;
+pub use contact::{ANY_FACET, MortarCheckpoint, MortarContact};
 pub use dual::{SurfaceTestFunctions, TestBasis, TestFunctions};
 pub use segment::{PairIntegrals, integrate_pair};
 pub use trace::{AdScalar, Facet, Trace};

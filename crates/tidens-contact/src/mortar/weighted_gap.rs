@@ -55,6 +55,14 @@ pub enum Derivatives {
     Value,
     /// Values and gradients.
     Gradient,
+    /// Values and the mortar gradient: `dg_j/dx_l = M_jl n_j` on the
+    /// master nodes, `-D_jk n_j` on the slave nodes and the nodal normal's
+    /// variation `V_j . dn_j`, without the variation of the segments
+    /// (their cells, test functions and Jacobians), whose terms are
+    /// proportional to the local gap (of the order of the penetration at
+    /// a pressed node). As cheap as the values, and exact for a uniform
+    /// gap between flat surfaces (the patch test).
+    Mortar,
     /// Values, gradients and Hessians.
     Hessian,
 }
@@ -128,7 +136,7 @@ fn pair_contribution(
     let n: [Vector3<f64>; 4] = snodes.map(|k| normals[&k]);
     let t = &test.facets[sf];
     let result = match derivatives {
-        Derivatives::Value => integrate_pair(&s, &m, &n, t)?.map(|integrals| PairDerivatives {
+        Derivatives::Value | Derivatives::Mortar => integrate_pair(&s, &m, &n, t)?.map(|integrals| PairDerivatives {
             integrals,
             dofs: Vec::new(),
             gradient: Default::default(),
@@ -324,6 +332,29 @@ fn finish(
         let n = nodal_normal(slave, ring, i, x);
         gap.gap = n.dot(&sum.v);
         gap.normal = n.into();
+        return gap;
+    }
+    if derivatives == Derivatives::Mortar {
+        let nd = normal_derivatives(slave, ring, i, x, false);
+        let n = nd.normal;
+        gap.gap = n.dot(&sum.v);
+        gap.normal = n.into();
+        let mut grad: BTreeMap<usize, f64> = BTreeMap::new();
+        for (&k, &dk) in &sum.d {
+            for c in 0..3 {
+                *grad.entry(3 * k + c).or_default() -= dk * n[c];
+            }
+        }
+        for (&l, &ml) in &sum.m {
+            for c in 0..3 {
+                *grad.entry(3 * l + c).or_default() += ml * n[c];
+            }
+        }
+        for r in 0..3 * nd.nodes.len() {
+            *grad.entry(nd.dof(r)).or_default() +=
+                (0..3).map(|c| sum.v[c] * nd.jacobian[(c, r)]).sum::<f64>();
+        }
+        gap.gradient = grad.into_iter().collect();
         return gap;
     }
     let nd = normal_derivatives(slave, ring, i, x, derivatives == Derivatives::Hessian);
