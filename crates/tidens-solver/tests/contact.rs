@@ -62,23 +62,28 @@ fn stacked_pair(radius: f64) -> Cell {
 /// that contact replaces.
 #[test]
 fn identical_octants_pressed_along_an_axis_deform_mirror_symmetrically() {
-    pair_deforms_mirror_symmetrically(ElementKind::Hex8);
+    pair_deforms_mirror_symmetrically(ElementKind::Hex8, 0.62, 0.6);
 }
 
 /// The same with quadratic tetrahedra, in contact on the flat triangles of
-/// their 6-node faces.
+/// their 6-node faces, pressed a shorter way (PAIR_UNTIL, default 0.56):
+/// each of their steps that brings nodes into contact takes 15 to 25
+/// Newton iterations on the pair's larger system (to 0.62, 40 s).
 #[test]
 fn identical_tet10_octants_pressed_along_an_axis_deform_mirror_symmetrically() {
-    pair_deforms_mirror_symmetrically(ElementKind::Tet10);
+    let until: f64 = std::env::var("PAIR_UNTIL").map_or(0.56, |v| v.parse().unwrap());
+    pair_deforms_mirror_symmetrically(ElementKind::Tet10, until, until - 0.01);
 }
 
-fn pair_deforms_mirror_symmetrically(element: ElementKind) {
+/// Presses the stacked pair and the sc cell to `until` and compares them
+/// at the density `mark`.
+fn pair_deforms_mirror_symmetrically(element: ElementKind, until: f64, mark: f64) {
     let r = 0.05;
     let level: u32 = std::env::var("PAIR_LEVEL").map_or(1, |v| v.parse().unwrap());
     let (scene, mut pair) = press_with(
         &stacked_pair(r),
         level,
-        0.62,
+        until,
         ContactMode::Frictionless,
         element,
     );
@@ -131,8 +136,12 @@ fn pair_deforms_mirror_symmetrically(element: ElementKind) {
     // the weight of a fold between facets sharing a corner took their far
     // corners' elevations (the `fold` module of `tidens-contact`), 2.6e-6
     // R at level 1 and 3.9e-4 R at level 2.
+    // The tetrahedra's bounds are twice what they measure: to rho = 0.62,
+    // 4.1e-3 R and 4.8e-4 R (below); to 0.56, 9.8e-4 R and 9.5e-5 R (the
+    // asymmetry grows with the deformation).
     let (asym_tol, flat_tol) = match element {
         ElementKind::Hex8 => (1e-12 * r, 1e-6 * r),
+        ElementKind::Tet10 if until <= 0.56 => (2e-3 * r, 2e-4 * r),
         ElementKind::Tet10 => (8e-3 * r, 1e-3 * r),
     };
     assert!(asym < asym_tol, "mirror asymmetry {asym:e} mm");
@@ -156,7 +165,7 @@ fn pair_deforms_mirror_symmetrically(element: ElementKind) {
     let (_, mut sc) = press_with(
         &Cell::sc(r, 1.0).unwrap(),
         1,
-        0.62,
+        until,
         ContactMode::Frictionless,
         element,
     );
@@ -167,10 +176,11 @@ fn pair_deforms_mirror_symmetrically(element: ElementKind) {
         let (a, b) = (&c[k - 1], &c[k]);
         a.time + (rho - a.rel_density) / (b.rel_density - a.rel_density) * (b.time - a.time)
     };
-    let (tp, ts) = (t_at(&pair, 0.6), t_at(&sc, 0.6));
+    let (tp, ts) = (t_at(&pair, mark), t_at(&sc, mark));
+    eprintln!("t({mark}): pair {tp:.4} s, sc {ts:.4} s; contact surface off the mid-plane by {:.2e} R", flat / r);
     assert!(
         (tp / ts - 1.0).abs() < 0.05,
-        "t(0.6): pair {tp:.3} s, sc {ts:.3} s"
+        "t({mark}): pair {tp:.3} s, sc {ts:.3} s"
     );
 }
 
@@ -180,18 +190,22 @@ fn pair_deforms_mirror_symmetrically(element: ElementKind) {
 /// particle is in equilibrium under contact and plane forces.
 #[test]
 fn contact_force_balances_the_piston_force_at_every_step() {
-    contact_force_balances(ElementKind::Hex8);
+    contact_force_balances(ElementKind::Hex8, 0.72, 10);
 }
 
-/// The same with quadratic tetrahedra.
+/// The same with quadratic tetrahedra, to rho = 0.70 (the contact set
+/// grows at every step, each converged to 1e-7: 10 steps, 14 s; to 0.72,
+/// 13 steps and 20 s).
 #[test]
 fn tet10_contact_force_balances_the_piston_force_at_every_step() {
-    contact_force_balances(ElementKind::Tet10);
+    contact_force_balances(ElementKind::Tet10, 0.70, 8);
 }
 
-fn contact_force_balances(element: ElementKind) {
+/// Presses bcc to `until` and checks the balance at each of more than
+/// `min_steps` steps.
+fn contact_force_balances(element: ElementKind, until: f64, min_steps: usize) {
     let cell = Cell::bcc(0.05, 1.0).unwrap();
-    let (scene, sim) = press_with(&cell, 1, 0.72, ContactMode::Frictionless, element);
+    let (scene, sim) = press_with(&cell, 1, until, ContactMode::Frictionless, element);
     // Balance holds to what Newton leaves: converge it well below the bound
     // checked (the default leaves 1e-4 of the piston force per equation).
     let mut settings = sim.settings().clone();
