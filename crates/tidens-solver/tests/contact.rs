@@ -244,7 +244,7 @@ fn contact_force_balances(element: ElementKind, until: f64, min_steps: usize) {
         assert!((planes[2] + piston).abs() <= 1e-5 * piston);
         steps += 1;
     }
-    assert!(steps > 10);
+    assert!(steps > min_steps, "{steps} steps");
     assert!(
         worst < 1e-5,
         "contact force off the piston force by {worst:e} (relative)"
@@ -254,6 +254,11 @@ fn contact_force_balances(element: ElementKind, until: f64, min_steps: usize) {
 
 /// fcc: the four octants are equivalent by symmetry, so their plastic
 /// strain agrees (to the contact's slave-master asymmetry); sc-2: the small particles deform more than the large ones.
+///
+/// fcc is pressed to 0.8: earlier the octants' plastic strains are small
+/// and the asymmetry weighs more (spread 2.1e-3 at 0.77, 7.7e-3 at 0.76).
+/// sc-2 from 0.600 to 0.61 shows the sizes as clearly as to 0.65 (small
+/// over large 6.9 against 6.1, one size alike to 1e-13).
 #[test]
 fn plastic_strain_follows_the_symmetry_and_the_sizes() {
     let mean_eqps = |scene: &Scene, sim: &Simulation| -> Vec<(f64, f64)> {
