@@ -286,13 +286,13 @@ fn plastic_strain_follows_the_symmetry_and_the_sizes() {
         (a.min(x.0), b.max(x.0))
     });
     // Not to round-off: each touching pair has a slave and a master side,
-    // and which side is which differs between the octants (measured 2.1e-4
+    // and which side is which differs between the octants (measured 6.0e-4
     // at level 1).
     assert!(hi / lo - 1.0 < 1e-3, "fcc mean plastic strains {e:?}");
     let (scene, mut sc2) = press(
         &Cell::sc2(0.05, 1.566, 1.0).unwrap(),
         1,
-        0.65,
+        0.61,
         ContactMode::Frictionless,
     );
     sc2.run(|_| true).unwrap();
