@@ -518,8 +518,24 @@ fn press_to(
 /// fold terms' tangent was made positive semi-definite). Without the
 /// hold on the sphere's rotation (the drag alone) t(0.6) was 13.11 s (3.8
 /// % off); with the hold ten times weaker it failed at rho = 0.567.
+///
+/// Pressed to 0.6 here (25 s); on past rho = 0.7, where the sphere once
+/// stalled, by the slow test below.
 #[test]
 fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell() {
+    whole_sphere_against_the_sc_octant_cell(0.6);
+}
+
+/// The same, pressed on to rho = 0.75 (a minute on one core): past rho =
+/// 0.7, where the sphere once stalled (see `FULL_FOLD`), within the two
+/// runs' estimates of their time-stepping errors.
+#[test]
+#[ignore = "slow: the periodic sphere pressed to rho = 0.75 takes a minute; run with --ignored"]
+fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell_past_0_7() {
+    whole_sphere_against_the_sc_octant_cell(0.75);
+}
+
+fn whole_sphere_against_the_sc_octant_cell(until: f64) {
     let r = 0.05;
     let options = MeshOptions {
         level: 1,
@@ -529,8 +545,8 @@ fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell() {
     let cell = Cell::sc(r, 1.0).unwrap();
     let octant = Scene::from_cell(&cell, &options).unwrap();
     let periodic = periodic_lattice(&cell, &options);
-    let (octant_curve, _) = press_to(&octant, 0.75);
-    let (periodic_curve, stats) = press_to(&periodic, 0.75);
+    let (octant_curve, _) = press_to(&octant, until);
+    let (periodic_curve, stats) = press_to(&periodic, until);
     // The same initial density: the same mesh.
     let (rho_o, rho_p) = (octant_curve[0].rel_density, periodic_curve[0].rel_density);
     assert!(
@@ -541,14 +557,13 @@ fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell() {
         time_at_density(&octant_curve, 0.6),
         time_at_density(&periodic_curve, 0.6),
     );
-    // Within 1 %: the time steps' error (tolerance 1e-2 by default) and
+    // Within 1 %: the time steps' error (tolerance 2e-2 by default) and
     // the penalty's compliance.
     assert!((t_p / t_o - 1.0).abs() < 0.01, "t(0.6) {t_p} against {t_o}");
-    // Past rho = 0.7 (where the sphere once stalled, see `FULL_FOLD`),
-    // within the two runs' estimates of their time-stepping errors. At
-    // level 1 (`benches/periodic.py`): t(0.7) = 81.72 s against 82.05 s,
-    // t(0.75) = 146.2 s against 146.6 s.
-    for rho in [0.65, 0.7, 0.75] {
+    // Past rho = 0.7, within the two runs' estimates of their
+    // time-stepping errors. At level 1 (`benches/periodic.py`): t(0.7) =
+    // 81.72 s against 82.05 s, t(0.75) = 146.2 s against 146.6 s.
+    for rho in [0.65, 0.7, 0.75].into_iter().filter(|&rho| rho <= until) {
         let error = |c: &[tidens_solver::CurvePoint]| {
             c.iter()
                 .find(|p| p.rel_density >= rho)
