@@ -602,7 +602,13 @@ fn whole_sphere_against_the_sc_octant_cell(until: f64) {
 /// hold uncapped this run failed at t = 2.61 s, rho = 0.774 (checked).
 /// The coordination number went from 8 to 10 between rho = 0.7668 and
 /// 0.7698, the height shrunk by 13.2 %.
+///
+/// Slow (a minute on one core, its first ten steps, closing the contacts,
+/// a third of it) and the count of ten needs rho = 0.77: run with
+/// `cargo test --release -- --ignored`. The periodic sphere above checks
+/// the periodic cell against the octant cell in the default run.
 #[test]
+#[ignore = "slow: two periodic spheres pressed to rho = 0.78 take a minute; run with --ignored"]
 fn two_whole_spheres_in_a_periodic_cube_densify_as_the_bcc_octant_cell() {
     let options = MeshOptions {
         level: 1,
