@@ -165,7 +165,7 @@ def test_tet10_meshes_the_sphere_octant_almost_exactly_and_runs(tmp_path: Path) 
         stress_mpa=10.0,
         solver=td.SolverSettings(mesh_level=1, tolerance=0.05, element="tet10"),
     )
-    r = case.run(until_density=0.56, out_dir=tmp_path)
+    r = case.run(until_density=0.54, out_dir=tmp_path)
     # Quadratic geometry: the octant's volume is exact to 3e-5 even on
     # the coarsest mesh (the hex8 mesh is 1.7 % short).
     assert r.rho0 == pytest.approx(math.pi / 6, rel=1e-4)

@@ -17,19 +17,23 @@ def norton(n: float) -> td.Material:
     return td.Material(BASE.young_mpa, BASE.poisson, BASE.creep_c * 10.0 ** (BASE.creep_n - n), n)
 
 
-def press(cell: td.Cell, material: td.Material = BASE, stress: float = 10.0, **run: float) -> td.Result:
+def press(cell: td.Cell, material: td.Material = BASE, stress: float = 10.0, tolerance: float = 0.05, **run: float) -> td.Result:
+    """``cell`` at mesh level 1 pressed to rho = 0.9 (or as ``run`` says).
+    The physical checks do not depend on the time tolerance, so the cases
+    run at the loose 0.05 (a third fewer steps than at 0.02, and larger
+    ones: no easier on Newton); the similarity below needs 0.02."""
     case = td.Case(cell=cell, material=material, stress_mpa=stress,
-                   solver=td.SolverSettings(mesh_level=1, tolerance=0.02))
+                   solver=td.SolverSettings(mesh_level=1, tolerance=tolerance))
     if not run:
         run = {"until_density": 0.9}
     return case.run(error_estimate=False, **run)  # type: ignore[arg-type]
 
 
+# C = 1e-12 and a stress of 0.1 MPa on sc are run, and checked, by the
+# similarity test below.
 SC_CASES = {
     "n = 1": lambda: press(td.cells.sc(), norton(1.0)),
     "n = 15": lambda: press(td.cells.sc(), norton(15.0)),
-    "C = 1e-12": lambda: press(td.cells.sc(), td.materials.custom(1e-12, BASE.creep_n)),
-    "stress 0.1 MPa": lambda: press(td.cells.sc(), stress=0.1),
     "stress 200 MPa": lambda: press(td.cells.sc(), stress=200.0),
     "E/sigma 1e2": lambda: press(td.cells.sc(), BASE.with_elastic(1e3, 0.3)),
     "E/sigma 1e7": lambda: press(td.cells.sc(), BASE.with_elastic(1e8, 0.3)),
@@ -81,11 +85,13 @@ def test_norton_similarity_over_orders_of_magnitude() -> None:
     # With E/sigma large and the 1 s ramp short next to the run, t(rho)
     # scales as 1/(C sigma^n): C over 5 decades and the stress over 2 give
     # the same C sigma^n t(0.9), to the time tolerance and the elastic part.
-    # (At 100 MPa t(0.9) is 2 s and the ramp is not negligible.)
+    # (At 100 MPa t(0.9) is 2 s and the ramp is not negligible.) The runs
+    # at C = 1e-12 and at 0.1 MPa are extreme cases too: each stays physical.
     n = BASE.creep_n
     reduced = []
-    for c, stress in ((BASE.creep_c, 10.0), (1e-12, 10.0), (BASE.creep_c, 1.0), (BASE.creep_c, 0.1)):
-        r = press(td.cells.sc(), td.materials.custom(c, n), stress=stress)
+    for c, stress in ((BASE.creep_c, 10.0), (1e-12, 10.0), (BASE.creep_c, 0.1)):
+        r = press(td.cells.sc(), td.materials.custom(c, n), stress=stress, tolerance=0.02)
+        assert r.status in td.case.FINISHED and r.checks()["ok"], (c, stress, r.checks())
         t = r.time_to_density(0.9)
         assert t is not None
         reduced.append(c * stress**n * t)

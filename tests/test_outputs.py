@@ -134,15 +134,27 @@ def bcc_every_10() -> td.Case:
     )
 
 
+# The runs below stop at rho = 0.77: 48 steps, four checkpoints (to 0.8,
+# 72 steps).
+UNTIL = 0.77
+
+
+@pytest.fixture(scope="module")
+def through(tmp_path_factory: pytest.TempPathFactory) -> td.Result:
+    """``bcc_every_10`` run through to ``UNTIL`` (no companion), once for the
+    tests that compare a stopped and resumed run with it."""
+    return bcc_every_10().run(until_density=UNTIL, out_dir=tmp_path_factory.mktemp("through"), error_estimate=False)
+
+
 def stopped_at(case: td.Case, step: int, out: Path) -> None:
-    """Runs ``case`` to rho = 0.8 into ``out`` and stops it (Ctrl-C) at ``step``."""
+    """Runs ``case`` to ``UNTIL`` into ``out`` and stops it (Ctrl-C) at ``step``."""
 
     def ctrl_c(point: dict[str, float]) -> None:
         if point["step"] >= step:
             raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        case.run(until_density=0.8, out_dir=out, callback=ctrl_c, error_estimate=False)
+        case.run(until_density=UNTIL, out_dir=out, callback=ctrl_c, error_estimate=False)
 
 
 def test_a_damaged_checkpoint_is_refused_naming_the_file(tmp_path: Path) -> None:
@@ -174,7 +186,7 @@ def test_a_damaged_checkpoint_is_refused_naming_the_file(tmp_path: Path) -> None
 
 def test_a_run_stopped_in_the_middle_resumes_to_the_same_curve_bit_for_bit(tmp_path: Path) -> None:
     case = bcc_every_10()
-    through = case.run(until_density=0.8, out_dir=tmp_path / "through", snapshot_densities=[0.72, 0.75])
+    through = case.run(until_density=UNTIL, out_dir=tmp_path / "through", snapshot_densities=[0.72, 0.75])
     steps = through.stats["steps"]
     assert steps > 30
 
@@ -184,7 +196,7 @@ def test_a_run_stopped_in_the_middle_resumes_to_the_same_curve_bit_for_bit(tmp_p
 
     out = tmp_path / "stopped"
     with pytest.raises(KeyboardInterrupt):
-        case.run(until_density=0.8, out_dir=out, snapshot_densities=[0.72, 0.75], callback=ctrl_c)
+        case.run(until_density=UNTIL, out_dir=out, snapshot_densities=[0.72, 0.75], callback=ctrl_c)
     assert json.loads((out / "summary.json").read_text())["status"] == "interrupted"
     resumed = td.resume(out)
     for column, values in through.curve.items():
@@ -203,9 +215,10 @@ def test_a_run_stopped_in_the_middle_resumes_to_the_same_curve_bit_for_bit(tmp_p
     assert names == [name for _, name in io.read_pvd(tmp_path / "through" / "fields.pvd")]
 
 
-def test_a_run_resumed_with_another_checkpoint_interval_records_and_keeps_it(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_run_resumed_with_another_checkpoint_interval_records_and_keeps_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], through: td.Result
+) -> None:
     case = bcc_every_10()
-    through = case.run(until_density=0.8, out_dir=tmp_path / "through", error_estimate=False)
     out = tmp_path / "stopped"
     stopped_at(case, 23, out)
     record = (out / "run.json").read_text()
@@ -215,7 +228,8 @@ def test_a_run_resumed_with_another_checkpoint_interval_records_and_keeps_it(tmp
     # Checkpoints every 4 steps from step 20 on: the run records it, goes
     # on from step 20 as the through run did, parts from it where it first
     # drops its cached factor the through run kept (step 24), and reaches
-    # rho = 0.8 at the same time to round-off (5.6e-7 relative, measured).
+    # UNTIL at the same time to round-off (9.0e-7 relative, measured; 5.6e-7
+    # to rho = 0.8).
     assert main(["run", "--resume", str(out), "--checkpoint-every", "4", "--quiet", "--no-plot"]) == 0
     assert "resumed" in capsys.readouterr().out
     assert json.loads((out / "run.json").read_text())["case"]["solver"]["checkpoint_every"] == 4
@@ -224,17 +238,18 @@ def test_a_run_resumed_with_another_checkpoint_interval_records_and_keeps_it(tmp
     for column, values in through.curve.items():
         assert np.array_equal(values[:25], resumed.curve[column][:25], equal_nan=True), column
     assert not np.array_equal(through.time_s, resumed.time_s)
-    t_through, t_resumed = through.time_to_density(0.8), resumed.time_to_density(0.8)
+    t_through, t_resumed = through.time_to_density(UNTIL), resumed.time_to_density(UNTIL)
     assert t_resumed == pytest.approx(t_through, rel=1e-4)
     # The last checkpoint is the last step that is a multiple of 4.
-    sim = case.simulation(0.8, None, [], resume_from=(out / "checkpoint.bin").read_bytes())
+    sim = case.simulation(UNTIL, None, [], resume_from=(out / "checkpoint.bin").read_bytes())
     steps = len(resumed.time_s) - 1
     assert len(sim.curve()["time_s"]) - 1 == steps - steps % 4
 
 
-def test_a_run_stopped_between_checkpoints_goes_on_from_its_last_step_if_asked(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_run_stopped_between_checkpoints_goes_on_from_its_last_step_if_asked(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], through: td.Result
+) -> None:
     case = bcc_every_10()
-    through = case.run(until_density=0.8, out_dir=tmp_path / "through", error_estimate=False)
     out = tmp_path / "stopped"
     stopped_at(case, 25, out)
     stop = out / "checkpoint_stop.bin"
@@ -261,7 +276,7 @@ def test_a_run_stopped_between_checkpoints_goes_on_from_its_last_step_if_asked(t
     resumed = td.load(out)
     for column, values in through.curve.items():
         assert np.array_equal(values[:26], resumed.curve[column][:26], equal_nan=True), column
-    assert resumed.time_to_density(0.8) == pytest.approx(through.time_to_density(0.8), rel=1e-4)
+    assert resumed.time_to_density(UNTIL) == pytest.approx(through.time_to_density(UNTIL), rel=1e-4)
     assert not stop.exists()
     with pytest.raises(SystemExit) as e:
         main(["run", "--from-last-step", "--stress", "10", "--out", str(tmp_path / "new")])

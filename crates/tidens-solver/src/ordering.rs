@@ -163,9 +163,18 @@ mod tests {
 
     /// A METIS call leaves the SIGTERM handler as it found it, flags and
     /// all (GKlib's `signal()` put it back one-shot).
+    ///
+    /// The handler is process-wide and other tests of this binary order
+    /// their tangents on other threads meanwhile: each such call saves the
+    /// handler, lets GKlib replace it and puts back what it saved. So the
+    /// handler is installed and read back under `METIS_LOCK`, as those
+    /// calls save and restore it: no call is then half-way (one that saved
+    /// the handler before this test installed its own would put the old one
+    /// back after it).
     #[cfg(unix)]
     #[test]
     fn an_ordering_leaves_the_sigterm_handler_as_it_was() {
+        let locked = || METIS_LOCK.lock().unwrap_or_else(PoisonError::into_inner);
         let read = || {
             // SAFETY: as in `SignalHandlers::save`.
             let mut now: libc::sigaction = unsafe { std::mem::zeroed() };
@@ -178,12 +187,19 @@ mod tests {
         mine.sa_sigaction = on_term as extern "C" fn(libc::c_int) as libc::sighandler_t;
         mine.sa_flags = libc::SA_ONSTACK;
         let mut before: libc::sigaction = unsafe { std::mem::zeroed() };
-        unsafe { libc::sigaction(libc::SIGTERM, &mine, &mut before) };
-        let installed = read();
+        let installed = {
+            let _lock = locked();
+            unsafe { libc::sigaction(libc::SIGTERM, &mine, &mut before) };
+            read()
+        };
         let (col_ptr, row_idx) = chain_of_runs(40, 3);
         let ordered = nested_dissection(&col_ptr, &row_idx);
-        let after = read();
-        unsafe { libc::sigaction(libc::SIGTERM, &before, std::ptr::null_mut()) };
+        let after = {
+            let _lock = locked();
+            let after = read();
+            unsafe { libc::sigaction(libc::SIGTERM, &before, std::ptr::null_mut()) };
+            after
+        };
         assert!(ordered.is_some());
         assert_eq!(after, installed);
     }

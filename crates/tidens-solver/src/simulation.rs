@@ -892,19 +892,29 @@ impl Simulation {
 
 #[cfg(test)]
 mod tests {
-    use crate::{NewtonSettings, Simulation};
+    use crate::test_support::{bcc_level1, bcc_level1_scene, bcc_level1_settings};
+    use crate::{Checkpoint, NewtonSettings, Preset, Simulation};
+    use std::sync::OnceLock;
 
     /// The bcc cell at level 1 (15 MPa, tolerance 0.05, to stop at rho =
-    /// 0.9) pressed to `rho`.
-    fn bcc_pressed_to(rho: f64) -> Simulation {
-        let mut sim = crate::test_support::bcc_level1(|s| {
+    /// 0.9) pressed to rho = 0.72: pressed once for the tests below, each
+    /// resuming from its checkpoint (a run of its own, without the caches
+    /// the pressing run kept: the tests look at the state, not at them).
+    fn bcc_pressed_to_072() -> Simulation {
+        let adjust = |s: &mut crate::Settings| {
             s.until_density = Some(0.9);
             s.tolerance = 0.05;
+        };
+        static PRESSED: OnceLock<Checkpoint> = OnceLock::new();
+        let saved = PRESSED.get_or_init(|| {
+            let mut sim = bcc_level1(adjust);
+            while sim.rel_density() < 0.72 {
+                sim.advance().unwrap();
+            }
+            sim.checkpoint()
         });
-        while sim.rel_density() < rho {
-            sim.advance().unwrap();
-        }
-        sim
+        let material = Preset::Ti64Creep1293K.material();
+        Simulation::resume(&bcc_level1_scene(), material, bcc_level1_settings(adjust), saved).unwrap()
     }
 
     /// A failed attempt changes the contact state (planes caught or
@@ -912,7 +922,7 @@ mod tests {
     /// exactly, so the retry starts from the last converged step.
     #[test]
     fn a_failed_attempt_is_undone_exactly() {
-        let mut sim = bcc_pressed_to(0.72);
+        let mut sim = bcc_pressed_to_072();
         let before = sim.contact_snapshot();
         assert!(before.particles.as_ref().is_some_and(|p| !p.is_empty()));
         let u = sim.state.u.clone();
@@ -943,7 +953,7 @@ mod tests {
     /// 1.7e-5 s aimed at 1e-6 past a target 1e-9 ahead lost 1e-5).
     #[test]
     fn a_step_aimed_at_the_target_density_lands_past_it() {
-        let mut sim = bcc_pressed_to(0.72);
+        let mut sim = bcc_pressed_to_072();
         let rate = sim.density_rate().unwrap();
         let free = sim.propose_dt();
         let floor = free / super::TARGET_DENSITY_STEP_FLOOR;
@@ -980,18 +990,8 @@ mod tests {
     /// within Newton's tolerance.
     #[test]
     fn an_interrupted_step_leaves_the_last_converged_step() {
-        let settings = |s: &mut crate::Settings| {
-            s.until_density = Some(0.9);
-            s.tolerance = 0.05;
-        };
-        let (mut through, mut stopped) = (
-            crate::test_support::bcc_level1(settings),
-            crate::test_support::bcc_level1(settings),
-        );
-        while through.rel_density() < 0.72 {
-            through.advance().unwrap();
-            stopped.advance().unwrap();
-        }
+        // Both at rho = 0.72, from the one checkpoint.
+        let (mut through, mut stopped) = (bcc_pressed_to_072(), bcc_pressed_to_072());
         let (u, contact, steps) = (
             stopped.state.u.clone(),
             stopped.contact_snapshot(),

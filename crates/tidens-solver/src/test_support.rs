@@ -2,26 +2,41 @@
 
 use crate::{Cell, LoadHistory, MeshOptions, Preset, Scene, Settings, Simulation};
 
-/// The bcc cell at level 1, Ti-6Al-4V at 1293 K, 15 MPa ramped over 1 s,
-/// with `adjust` applied to the settings (stop conditions and the like).
-pub(crate) fn bcc_level1(adjust: impl FnOnce(&mut Settings)) -> Simulation {
+/// The bcc cell at level 1.
+pub(crate) fn bcc_level1_scene() -> Scene {
     let options = MeshOptions {
         level: 1,
         ..MeshOptions::default()
     };
-    let scene = Scene::from_cell(&Cell::bcc(0.05, 1.0).unwrap(), &options).unwrap();
-    ti64_creep(&scene, 15.0, adjust)
+    Scene::from_cell(&Cell::bcc(0.05, 1.0).unwrap(), &options).unwrap()
 }
 
-/// `scene` pressed at `stress` \[MPa\] ramped over 1 s, Ti-6Al-4V at
-/// 1293 K, with `adjust` applied to the settings.
-fn ti64_creep(scene: &Scene, stress: f64, adjust: impl FnOnce(&mut Settings)) -> Simulation {
+/// The bcc cell at level 1, Ti-6Al-4V at 1293 K, 15 MPa ramped over 1 s,
+/// with `adjust` applied to the settings (stop conditions and the like).
+pub(crate) fn bcc_level1(adjust: impl FnOnce(&mut Settings)) -> Simulation {
+    ti64_creep(&bcc_level1_scene(), 15.0, adjust)
+}
+
+/// The settings of [`bcc_level1`]: 15 MPa ramped over 1 s, with `adjust`
+/// applied.
+pub(crate) fn bcc_level1_settings(adjust: impl FnOnce(&mut Settings)) -> Settings {
+    ti64_settings(15.0, adjust)
+}
+
+fn ti64_settings(stress: f64, adjust: impl FnOnce(&mut Settings)) -> Settings {
     let mut settings = Settings::new(LoadHistory {
         stress,
         knockdown: 1.0,
         ramp_time: 1.0,
     });
     adjust(&mut settings);
+    settings
+}
+
+/// `scene` pressed at `stress` \[MPa\] ramped over 1 s, Ti-6Al-4V at
+/// 1293 K, with `adjust` applied to the settings.
+fn ti64_creep(scene: &Scene, stress: f64, adjust: impl FnOnce(&mut Settings)) -> Simulation {
+    let settings = ti64_settings(stress, adjust);
     Simulation::new(scene, Preset::Ti64Creep1293K.material(), settings).unwrap()
 }
 

@@ -62,23 +62,28 @@ fn stacked_pair(radius: f64) -> Cell {
 /// that contact replaces.
 #[test]
 fn identical_octants_pressed_along_an_axis_deform_mirror_symmetrically() {
-    pair_deforms_mirror_symmetrically(ElementKind::Hex8);
+    pair_deforms_mirror_symmetrically(ElementKind::Hex8, 0.62, 0.6);
 }
 
 /// The same with quadratic tetrahedra, in contact on the flat triangles of
-/// their 6-node faces.
+/// their 6-node faces, pressed a shorter way (PAIR_UNTIL, default 0.56):
+/// each of their steps that brings nodes into contact takes 15 to 25
+/// Newton iterations on the pair's larger system (to 0.62, 40 s).
 #[test]
 fn identical_tet10_octants_pressed_along_an_axis_deform_mirror_symmetrically() {
-    pair_deforms_mirror_symmetrically(ElementKind::Tet10);
+    let until: f64 = std::env::var("PAIR_UNTIL").map_or(0.56, |v| v.parse().unwrap());
+    pair_deforms_mirror_symmetrically(ElementKind::Tet10, until, until - 0.01);
 }
 
-fn pair_deforms_mirror_symmetrically(element: ElementKind) {
+/// Presses the stacked pair and the sc cell to `until` and compares them
+/// at the density `mark`.
+fn pair_deforms_mirror_symmetrically(element: ElementKind, until: f64, mark: f64) {
     let r = 0.05;
     let level: u32 = std::env::var("PAIR_LEVEL").map_or(1, |v| v.parse().unwrap());
     let (scene, mut pair) = press_with(
         &stacked_pair(r),
         level,
-        0.62,
+        until,
         ContactMode::Frictionless,
         element,
     );
@@ -131,8 +136,12 @@ fn pair_deforms_mirror_symmetrically(element: ElementKind) {
     // the weight of a fold between facets sharing a corner took their far
     // corners' elevations (the `fold` module of `tidens-contact`), 2.6e-6
     // R at level 1 and 3.9e-4 R at level 2.
+    // The tetrahedra's bounds are twice what they measure: to rho = 0.62,
+    // 4.1e-3 R and 4.8e-4 R (below); to 0.56, 9.8e-4 R and 9.5e-5 R (the
+    // asymmetry grows with the deformation).
     let (asym_tol, flat_tol) = match element {
         ElementKind::Hex8 => (1e-12 * r, 1e-6 * r),
+        ElementKind::Tet10 if until <= 0.56 => (2e-3 * r, 2e-4 * r),
         ElementKind::Tet10 => (8e-3 * r, 1e-3 * r),
     };
     assert!(asym < asym_tol, "mirror asymmetry {asym:e} mm");
@@ -156,7 +165,7 @@ fn pair_deforms_mirror_symmetrically(element: ElementKind) {
     let (_, mut sc) = press_with(
         &Cell::sc(r, 1.0).unwrap(),
         1,
-        0.62,
+        until,
         ContactMode::Frictionless,
         element,
     );
@@ -167,10 +176,11 @@ fn pair_deforms_mirror_symmetrically(element: ElementKind) {
         let (a, b) = (&c[k - 1], &c[k]);
         a.time + (rho - a.rel_density) / (b.rel_density - a.rel_density) * (b.time - a.time)
     };
-    let (tp, ts) = (t_at(&pair, 0.6), t_at(&sc, 0.6));
+    let (tp, ts) = (t_at(&pair, mark), t_at(&sc, mark));
+    eprintln!("t({mark}): pair {tp:.4} s, sc {ts:.4} s; contact surface off the mid-plane by {:.2e} R", flat / r);
     assert!(
         (tp / ts - 1.0).abs() < 0.05,
-        "t(0.6): pair {tp:.3} s, sc {ts:.3} s"
+        "t({mark}): pair {tp:.3} s, sc {ts:.3} s"
     );
 }
 
@@ -180,18 +190,22 @@ fn pair_deforms_mirror_symmetrically(element: ElementKind) {
 /// particle is in equilibrium under contact and plane forces.
 #[test]
 fn contact_force_balances_the_piston_force_at_every_step() {
-    contact_force_balances(ElementKind::Hex8);
+    contact_force_balances(ElementKind::Hex8, 0.72, 10);
 }
 
-/// The same with quadratic tetrahedra.
+/// The same with quadratic tetrahedra, to rho = 0.70 (the contact set
+/// grows at every step, each converged to 1e-7: 10 steps, 14 s; to 0.72,
+/// 13 steps and 20 s).
 #[test]
 fn tet10_contact_force_balances_the_piston_force_at_every_step() {
-    contact_force_balances(ElementKind::Tet10);
+    contact_force_balances(ElementKind::Tet10, 0.70, 8);
 }
 
-fn contact_force_balances(element: ElementKind) {
+/// Presses bcc to `until` and checks the balance at each of more than
+/// `min_steps` steps.
+fn contact_force_balances(element: ElementKind, until: f64, min_steps: usize) {
     let cell = Cell::bcc(0.05, 1.0).unwrap();
-    let (scene, sim) = press_with(&cell, 1, 0.72, ContactMode::Frictionless, element);
+    let (scene, sim) = press_with(&cell, 1, until, ContactMode::Frictionless, element);
     // Balance holds to what Newton leaves: converge it well below the bound
     // checked (the default leaves 1e-4 of the piston force per equation).
     let mut settings = sim.settings().clone();
@@ -230,7 +244,7 @@ fn contact_force_balances(element: ElementKind) {
         assert!((planes[2] + piston).abs() <= 1e-5 * piston);
         steps += 1;
     }
-    assert!(steps > 10);
+    assert!(steps > min_steps, "{steps} steps");
     assert!(
         worst < 1e-5,
         "contact force off the piston force by {worst:e} (relative)"
@@ -240,6 +254,11 @@ fn contact_force_balances(element: ElementKind) {
 
 /// fcc: the four octants are equivalent by symmetry, so their plastic
 /// strain agrees (to the contact's slave-master asymmetry); sc-2: the small particles deform more than the large ones.
+///
+/// fcc is pressed to 0.8: earlier the octants' plastic strains are small
+/// and the asymmetry weighs more (spread 2.1e-3 at 0.77, 7.7e-3 at 0.76).
+/// sc-2 from 0.600 to 0.61 shows the sizes as clearly as to 0.65 (small
+/// over large 6.9 against 6.1, one size alike to 1e-13).
 #[test]
 fn plastic_strain_follows_the_symmetry_and_the_sizes() {
     let mean_eqps = |scene: &Scene, sim: &Simulation| -> Vec<(f64, f64)> {
@@ -267,13 +286,13 @@ fn plastic_strain_follows_the_symmetry_and_the_sizes() {
         (a.min(x.0), b.max(x.0))
     });
     // Not to round-off: each touching pair has a slave and a master side,
-    // and which side is which differs between the octants (measured 2.1e-4
+    // and which side is which differs between the octants (measured 6.0e-4
     // at level 1).
     assert!(hi / lo - 1.0 < 1e-3, "fcc mean plastic strains {e:?}");
     let (scene, mut sc2) = press(
         &Cell::sc2(0.05, 1.566, 1.0).unwrap(),
         1,
-        0.65,
+        0.61,
         ContactMode::Frictionless,
     );
     sc2.run(|_| true).unwrap();
@@ -499,8 +518,24 @@ fn press_to(
 /// fold terms' tangent was made positive semi-definite). Without the
 /// hold on the sphere's rotation (the drag alone) t(0.6) was 13.11 s (3.8
 /// % off); with the hold ten times weaker it failed at rho = 0.567.
+///
+/// Pressed to 0.6 here (25 s); on past rho = 0.7, where the sphere once
+/// stalled, by the slow test below.
 #[test]
 fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell() {
+    whole_sphere_against_the_sc_octant_cell(0.6);
+}
+
+/// The same, pressed on to rho = 0.75 (a minute on one core): past rho =
+/// 0.7, where the sphere once stalled (see `FULL_FOLD`), within the two
+/// runs' estimates of their time-stepping errors.
+#[test]
+#[ignore = "slow: the periodic sphere pressed to rho = 0.75 takes a minute; run with --ignored"]
+fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell_past_0_7() {
+    whole_sphere_against_the_sc_octant_cell(0.75);
+}
+
+fn whole_sphere_against_the_sc_octant_cell(until: f64) {
     let r = 0.05;
     let options = MeshOptions {
         level: 1,
@@ -510,8 +545,8 @@ fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell() {
     let cell = Cell::sc(r, 1.0).unwrap();
     let octant = Scene::from_cell(&cell, &options).unwrap();
     let periodic = periodic_lattice(&cell, &options);
-    let (octant_curve, _) = press_to(&octant, 0.75);
-    let (periodic_curve, stats) = press_to(&periodic, 0.75);
+    let (octant_curve, _) = press_to(&octant, until);
+    let (periodic_curve, stats) = press_to(&periodic, until);
     // The same initial density: the same mesh.
     let (rho_o, rho_p) = (octant_curve[0].rel_density, periodic_curve[0].rel_density);
     assert!(
@@ -522,14 +557,13 @@ fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell() {
         time_at_density(&octant_curve, 0.6),
         time_at_density(&periodic_curve, 0.6),
     );
-    // Within 1 %: the time steps' error (tolerance 1e-2 by default) and
+    // Within 1 %: the time steps' error (tolerance 2e-2 by default) and
     // the penalty's compliance.
     assert!((t_p / t_o - 1.0).abs() < 0.01, "t(0.6) {t_p} against {t_o}");
-    // Past rho = 0.7 (where the sphere once stalled, see `FULL_FOLD`),
-    // within the two runs' estimates of their time-stepping errors. At
-    // level 1 (`benches/periodic.py`): t(0.7) = 81.72 s against 82.05 s,
-    // t(0.75) = 146.2 s against 146.6 s.
-    for rho in [0.65, 0.7, 0.75] {
+    // Past rho = 0.7, within the two runs' estimates of their
+    // time-stepping errors. At level 1 (`benches/periodic.py`): t(0.7) =
+    // 81.72 s against 82.05 s, t(0.75) = 146.2 s against 146.6 s.
+    for rho in [0.65, 0.7, 0.75].into_iter().filter(|&rho| rho <= until) {
         let error = |c: &[tidens_solver::CurvePoint]| {
             c.iter()
                 .find(|p| p.rel_density >= rho)
@@ -568,7 +602,13 @@ fn a_whole_sphere_in_a_periodic_cube_densifies_as_the_sc_octant_cell() {
 /// hold uncapped this run failed at t = 2.61 s, rho = 0.774 (checked).
 /// The coordination number went from 8 to 10 between rho = 0.7668 and
 /// 0.7698, the height shrunk by 13.2 %.
+///
+/// Slow (a minute on one core, its first ten steps, closing the contacts,
+/// a third of it) and the count of ten needs rho = 0.77: run with
+/// `cargo test --release -- --ignored`. The periodic sphere above checks
+/// the periodic cell against the octant cell in the default run.
 #[test]
+#[ignore = "slow: two periodic spheres pressed to rho = 0.78 take a minute; run with --ignored"]
 fn two_whole_spheres_in_a_periodic_cube_densify_as_the_bcc_octant_cell() {
     let options = MeshOptions {
         level: 1,
