@@ -128,6 +128,13 @@ class SolverSettings:
         slender tips of elongated particles) have several closest points
         and can read a node as deep inside that their triangles put outside.
         The tet10 mesh always uses its faces' flat corner triangles.
+        ``"mortar"`` measures the contact segment to segment instead of
+        node to facet: each slave node's gap is the mean over its support
+        of the distance to the other surface (a weighted gap, integrated
+        facet pair by facet pair on the hexahedra's bilinear faces), so
+        that the forces vary smoothly as nodes slide over the other
+        surface's facets and a uniform pressure passes between non-matching
+        meshes exactly (the contact patch test). Frictionless contact only.
     checkpoint_every
         Steps between checkpoints (``checkpoint.bin`` in the output folder,
         also written at the start; default 50): at those steps the solver drops what it keeps only for
@@ -180,7 +187,7 @@ class SolverSettings:
             "checkpoint_every": c.integer("checkpoint_every", self.checkpoint_every),
         }
         _core.check_parameters(**fixed)
-        if fixed["element"] == "tet10" and fixed["contact_facets"] != SOLVER_DEFAULTS["contact_facets"]:
+        if fixed["element"] == "tet10" and fixed["contact_facets"] == "bilinear":
             raise ValueError(
                 f"contact_facets = {fixed['contact_facets']!r}: applies to hex8 elements only "
                 "(tet10 particles touch on the flat corner triangles of their faces)"
@@ -240,6 +247,8 @@ class Case:
             "tied_planes": c.flag("tied_planes", self.tied_planes),
         }
         _core.check_parameters(**fixed, material=self.material)
+        if fixed["contact"] == "tied" and self.solver.contact_facets == "mortar":
+            raise ValueError("contact = 'tied': mortar contact (contact_facets = 'mortar') is frictionless only")
         if self.cell.is_periodic:
             if fixed["tied_planes"]:
                 raise ValueError(

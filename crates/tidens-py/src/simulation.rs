@@ -20,7 +20,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 use tidens_solver::{
-    Checkpoint, ContactMode, ContactOptions, CurvePoint, ElementKind, HexFacets, LoadHistory,
+    Checkpoint, ContactFormulation, ContactMode, ContactOptions, CurvePoint, ElementKind, HexFacets, LoadHistory,
     MAX_MESH_LEVEL, MAX_NEWTON_ITERATIONS, MeshOptions, NewtonSettings, RunStats, Scene, Settings,
     Simulation, SolverError, Status,
 };
@@ -47,11 +47,13 @@ pub(crate) fn named<T: Copy>(parameter: &str, name: &str, table: &[(&str, T)]) -
         })
 }
 
-/// The Python names of the master facets of a hexahedral mesh's contact
-/// surface, the core's default first.
-pub(crate) const CONTACT_FACETS: [(&str, HexFacets); 2] = [
-    ("triangles", HexFacets::Triangles),
-    ("bilinear", HexFacets::Bilinear),
+/// The Python names of the particle-contact discretisations, the core's
+/// default first: node to facet on each hexahedral face's two triangles or
+/// on its bilinear patch, or mortar (weighted gaps, segment to segment).
+pub(crate) const CONTACT_FACETS: [(&str, (HexFacets, ContactFormulation)); 3] = [
+    ("triangles", (HexFacets::Triangles, ContactFormulation::NodeToFacet)),
+    ("bilinear", (HexFacets::Bilinear, ContactFormulation::NodeToFacet)),
+    ("mortar", (HexFacets::Triangles, ContactFormulation::Mortar)),
 ];
 
 /// The particle index of every element of a scene (-1 for an element of no
@@ -98,9 +100,10 @@ pub(crate) fn solver_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("newton_residual_tolerance", s.newton.residual_tolerance)?;
     d.set_item("contact_penalty_factor", s.contact.penalty_factor)?;
     d.set_item("penetration_tolerance", s.contact.penetration_tolerance)?;
-    let facets = CONTACT_FACETS
-        .iter()
-        .find(|(_, f)| *f == s.contact.hex_facets);
+    let facets = CONTACT_FACETS.iter().find(|(_, (f, formulation))| {
+        *formulation == s.contact.formulation
+            && (*formulation == ContactFormulation::Mortar || *f == s.contact.hex_facets)
+    });
     d.set_item("contact_facets", facets.map(|(name, _)| *name))?;
     d.set_item("checkpoint_every", s.checkpoint_every)?;
     Ok(d)
@@ -170,6 +173,10 @@ impl Knobs<'_> {
         let level = self.mesh_level.unwrap_or(mesh_defaults.level);
         let newton = &defaults.newton;
         let contact_defaults = &defaults.contact;
+        let facets = match self.contact_facets {
+            Some(name) => named("contact_facets", name, &CONTACT_FACETS)?,
+            None => (contact_defaults.hex_facets, contact_defaults.formulation),
+        };
         let settings = Settings {
             until_density: self.until_density,
             until_time: self.until_time_s,
@@ -198,10 +205,8 @@ impl Knobs<'_> {
                 penetration_tolerance: self
                     .penetration_tolerance
                     .unwrap_or(contact_defaults.penetration_tolerance),
-                hex_facets: match self.contact_facets {
-                    Some(name) => named("contact_facets", name, &CONTACT_FACETS)?,
-                    None => contact_defaults.hex_facets,
-                },
+                hex_facets: facets.0,
+                formulation: facets.1,
             },
             ..defaults.clone()
         };

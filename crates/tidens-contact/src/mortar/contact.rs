@@ -294,13 +294,86 @@ impl MortarContact {
             .collect()
     }
 
+    /// The weighted gaps of every node with a term (module docs): values
+    /// for all of them, and exact gradients (forward-mode differentiation
+    /// of the segments) for those that bring a force or a stiffness (the
+    /// pressed nodes, and the nodes near a pair of surfaces that presses
+    /// nowhere yet), which are a few of those within the band.
+    fn gaps_for_terms(&self, x: &[[f64; 3]]) -> Vec<(usize, usize, WeightedGap)> {
+        let eps = self.settings.penalty;
+        let band = -NEAR_BAND * self.settings.search_distance;
+        let values = self.gaps(x, Derivatives::Value);
+        let reading = |s: usize, m: usize, g: &WeightedGap| -> Option<(usize, f64, f64)> {
+            let area = covered(g);
+            let k = self.surfaces[s].nodes.binary_search(&g.node).ok()?;
+            if !(area > 0.0) {
+                return None;
+            }
+            let st = self.node_state((s, k, m));
+            let penetration = -g.gap / area + st.offset;
+            Some((k, penetration, (st.lambda + eps * penetration).max(0.0)))
+        };
+        let pressed: BTreeSet<(usize, usize)> = values
+            .iter()
+            .filter(|(s, m, g)| reading(*s, *m, g).is_some_and(|r| r.2 > 0.0))
+            .map(|(s, m, _)| (*s, *m))
+            .collect();
+        // The nodes (global ids) whose gradient is needed, by pass.
+        let mut needed: BTreeMap<(usize, usize), BTreeSet<usize>> = BTreeMap::new();
+        for (s, m, g) in &values {
+            if let Some((_, penetration, pressure)) = reading(*s, *m, g)
+                && (pressure > 0.0 || (penetration > band && !pressed.contains(&(*s, *m))))
+            {
+                needed.entry((*s, *m)).or_default().insert(g.node);
+            }
+        }
+        let exact: BTreeMap<(usize, usize, usize), WeightedGap> = self
+            .passes
+            .par_iter()
+            .filter_map(|pass| {
+                let nodes = needed.get(&(pass.slave, pass.master))?;
+                let test = self.tests[pass.slave].as_ref()?;
+                let slave = &self.surfaces[pass.slave];
+                let pairs: Vec<(usize, usize)> = pass
+                    .pairs
+                    .iter()
+                    .copied()
+                    .filter(|&(sf, _)| slave.facets[sf].iter().any(|n| nodes.contains(n)))
+                    .collect();
+                let gaps = weighted_gaps(
+                    slave,
+                    &self.surfaces[pass.master],
+                    x,
+                    &pairs,
+                    test,
+                    Derivatives::Gradient,
+                )
+                .ok()?;
+                Some(
+                    gaps.into_iter()
+                        .filter(|g| nodes.contains(&g.node))
+                        .map(|g| ((pass.slave, pass.master, g.node), g))
+                        .collect::<Vec<_>>(),
+                )
+            })
+            .flatten()
+            .collect();
+        values
+            .into_iter()
+            .map(|(s, m, g)| match exact.get(&(s, m, g.node)) {
+                Some(e) => (s, m, e.clone()),
+                None => (s, m, g),
+            })
+            .collect()
+    }
+
     /// The contact terms in the configuration `x` \[mm\], with tangents if
     /// asked (module docs).
     pub fn evaluate(&self, x: &[f64], with_tangent: bool) -> ContactEvaluation {
         let x = points(x);
         let eps = self.settings.penalty;
         let band = -NEAR_BAND * self.settings.search_distance;
-        let gaps = self.gaps(&x, if std::env::var_os("MORTAR_AD").is_some() { Derivatives::Gradient } else { Derivatives::Mortar });
+        let gaps = self.gaps_for_terms(&x);
         let mut terms: Vec<ContactTerm> = gaps
             .into_par_iter()
             .filter_map(|(s, m, g)| {
