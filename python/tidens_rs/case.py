@@ -606,21 +606,27 @@ class Case:
         if clear_outputs and curve_path is not None:
             io.clear_outputs(curve_path.parent)
         every = self.solver.checkpoint_every or CHECKPOINT_INTERVAL
-        writer = io.CurveWriter(curve_path, io.curve_columns(self.cell.is_periodic)) if curve_path is not None else None
         # A resumed run has passed some of them already.
         pending_rho = sorted(r for r in snapshot_densities if r > sim.rel_density)
         # Steps end on them, so that each snapshot is taken at its density.
         sim.set_density_targets(pending_rho)
         pending_t = sorted(t for t in snapshot_times_s if t > sim.time_s * (1 + 1e-9))
         snapshots: list[Snapshot] = []
-        if progress:
-            print(f"tidens: {sim.degrees_of_freedom} unknowns at mesh level {self.solver.mesh_level}, {self.solver.element}", file=sys.stderr)
-        bar = _progress_bar(sim.rel_density, until_density, until_time_s) if progress else None
+        columns = io.curve_columns(self.cell.is_periodic)
+        writer: io.CurveWriter | None = None
+        bar: Callable[[dict[str, float] | None], None] | None = None
         status = "failed"
         message: str | None = None
         error: BaseException | None = None
         start = time.perf_counter()
+        # Everything from the curve file's creation on is inside the try: a
+        # Ctrl-C or SIGTERM at any point still leaves a result and a summary.
         try:
+            if curve_path is not None:
+                writer = io.CurveWriter(curve_path, columns)
+            if progress:
+                print(f"tidens: {sim.degrees_of_freedom} unknowns at mesh level {self.solver.mesh_level}, {self.solver.element}", file=sys.stderr)
+                bar = _progress_bar(sim.rel_density, until_density, until_time_s)
             if writer is not None:
                 # The initial point, or the whole curve of a resumed run.
                 restored = sim.curve()
@@ -658,8 +664,13 @@ class Case:
             status, message, error = "output_failed", str(e), e
         # The columns of the cell's curve file (no coordination number for
         # cells of octants), so that a result and its loaded copy agree.
-        columns = io.curve_columns(self.cell.is_periodic)
         curve = {k: v for k, v in sim.curve().items() if k in columns}
+        if writer is None and curve_path is not None:
+            # Stopped before the file was open.
+            try:
+                writer = io.CurveWriter(curve_path, columns)
+            except io.OutputError as e:
+                error = error or e
         if writer is not None:
             error = _complete_curve(writer, curve, error)
         # Whatever stopped the run, it can go on from here. With
@@ -721,13 +732,18 @@ class Case:
         companion = replace(self, solver=replace(self.solver, mesh_level=level - 1, tolerance=tolerance))
         if progress:
             print(f"tidens: coarse companion run at mesh level {level - 1}, tolerance {tolerance:g} (for the error estimate)", file=sys.stderr)
-        other, error = companion._press(
-            until_density,
-            until_time_s,
-            curve_path=out / "companion_curve.csv" if out is not None else None,
-            progress=progress,
-            fields=False,
-        )
+        try:
+            other, error = companion._press(
+                until_density,
+                until_time_s,
+                curve_path=out / "companion_curve.csv" if out is not None else None,
+                progress=progress,
+                fields=False,
+            )
+        except KeyboardInterrupt as e:
+            # Stopped while the companion was set up: no curve of it yet.
+            note = "the companion was interrupted before its first step"
+            return estimate_error(arrays, None, MARK_DENSITIES, level=level, companion_note=note), e
         stopped = error if isinstance(error, KeyboardInterrupt) else None
         return _estimate_with(result, other, error), stopped
 
