@@ -32,6 +32,9 @@ fn main() {
     settings.until_density = Some(until);
     settings.tolerance = tolerance;
     settings.contact.formulation = formulation;
+    if let Some(f) = std::env::var("LADDER_PENALTY_FACTOR").ok().and_then(|s| s.parse().ok()) {
+        settings.contact.penalty_factor = f;
+    }
     let t0 = Instant::now();
     let mut sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
     if std::env::var("LADDER_GAPS").is_ok() {

@@ -2,7 +2,7 @@
 
 use tidens_fem::ElementKind;
 use tidens_solver::{
-    Cell, ContactMode, LoadHistory, MeshOptions, Octant, Preset, Scene, Settings, Simulation,
+    Cell, ContactFormulation, ContactMode, LoadHistory, MeshOptions, Octant, Preset, Scene, Settings, Simulation,
     Status,
 };
 
@@ -190,7 +190,14 @@ fn pair_deforms_mirror_symmetrically(element: ElementKind, until: f64, mark: f64
 /// particle is in equilibrium under contact and plane forces.
 #[test]
 fn contact_force_balances_the_piston_force_at_every_step() {
-    contact_force_balances(ElementKind::Hex8, 0.72, 10);
+    contact_force_balances(ElementKind::Hex8, ContactFormulation::NodeToFacet, 0.72, 10);
+}
+
+/// The same with mortar contact: its forces are the gradient of one energy
+/// of the weighted gaps, so they balance as node-to-facet's do.
+#[test]
+fn mortar_contact_force_balances_the_piston_force_at_every_step() {
+    contact_force_balances(ElementKind::Hex8, ContactFormulation::Mortar, 0.72, 10);
 }
 
 /// The same with quadratic tetrahedra, to rho = 0.70 (the contact set
@@ -198,18 +205,24 @@ fn contact_force_balances_the_piston_force_at_every_step() {
 /// 13 steps and 20 s).
 #[test]
 fn tet10_contact_force_balances_the_piston_force_at_every_step() {
-    contact_force_balances(ElementKind::Tet10, 0.70, 8);
+    contact_force_balances(ElementKind::Tet10, ContactFormulation::NodeToFacet, 0.70, 8);
 }
 
 /// Presses bcc to `until` and checks the balance at each of more than
 /// `min_steps` steps.
-fn contact_force_balances(element: ElementKind, until: f64, min_steps: usize) {
+fn contact_force_balances(
+    element: ElementKind,
+    formulation: ContactFormulation,
+    until: f64,
+    min_steps: usize,
+) {
     let cell = Cell::bcc(0.05, 1.0).unwrap();
     let (scene, sim) = press_with(&cell, 1, until, ContactMode::Frictionless, element);
     // Balance holds to what Newton leaves: converge it well below the bound
     // checked (the default leaves 1e-4 of the piston force per equation).
     let mut settings = sim.settings().clone();
     settings.newton.residual_tolerance = 1e-7;
+    settings.contact.formulation = formulation;
     let mut sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
     let area = scene.lengths[0] * scene.lengths[1];
     let mut steps = 0;
