@@ -32,6 +32,9 @@ fn main() {
     settings.until_density = Some(until);
     settings.tolerance = tolerance;
     settings.contact.formulation = formulation;
+    if let Some(r) = std::env::var("LADDER_RTOL").ok().and_then(|s| s.parse().ok()) {
+        settings.newton.residual_tolerance = r;
+    }
     if let Some(f) = std::env::var("LADDER_PENALTY_FACTOR").ok().and_then(|s| s.parse().ok()) {
         settings.contact.penalty_factor = f;
     }
@@ -91,7 +94,7 @@ fn main() {
         let sum: [f64; 3] = std::array::from_fn(|c| f0.iter().filter(|(d, _)| *d % 3 == c).map(|(_, v)| v).sum());
         println!("force sum {:?}, max |f| {:e}", sum, f0.values().fold(0.0f64, |a, b| a.max(b.abs())));
         let dofs: Vec<usize> = f0.keys().copied().collect();
-        let h = 1e-9;
+        let h: f64 = std::env::var("LADDER_FD_H").ok().and_then(|s| s.parse().ok()).unwrap_or(1e-9);
         let mut worst = 0.0f64; let mut scale = 0.0f64;
         for &d in dofs.iter().step_by(7) {
             let mut xp = x.clone(); xp[d] += h; let mut xm = x.clone(); xm[d] -= h;
@@ -99,6 +102,7 @@ fn main() {
             for &e in &dofs {
                 let fd = (fp.get(&e).unwrap_or(&0.0) - fm.get(&e).unwrap_or(&0.0)) / (2.0 * h);
                 let kk = *k.get(&(e, d)).unwrap_or(&0.0);
+                if (fd - kk).abs() > worst { println!("  worse: row {e} col {d}: fd {fd:e} tangent {kk:e}"); }
                 worst = worst.max((fd - kk).abs()); scale = scale.max(fd.abs());
             }
         }

@@ -156,7 +156,6 @@ fn particle_contact(
         .particles
         .iter()
         .map(|p| match scene.element() {
-            ElementKind::Hex8 if mortar => ContactSurface::from_quads(&p.surface, scene.nodes()),
             ElementKind::Hex8 => match settings.contact.hex_facets {
                 HexFacets::Triangles => {
                     ContactSurface::from_quads_as_triangles(&p.surface, scene.nodes())

@@ -194,10 +194,11 @@ fn contact_force_balances_the_piston_force_at_every_step() {
 }
 
 /// The same with mortar contact: its forces are the gradient of one energy
-/// of the weighted gaps, so they balance as node-to-facet's do.
+/// of the weighted gaps, so they balance as node-to-facet's do (7 steps to
+/// 0.72, each converged to 1e-7).
 #[test]
 fn mortar_contact_force_balances_the_piston_force_at_every_step() {
-    contact_force_balances(ElementKind::Hex8, ContactFormulation::Mortar, 0.72, 10);
+    contact_force_balances(ElementKind::Hex8, ContactFormulation::Mortar, 0.72, 5);
 }
 
 /// The same with quadratic tetrahedra, to rho = 0.70 (the contact set

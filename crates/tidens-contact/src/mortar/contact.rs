@@ -18,7 +18,7 @@
 //! Pi_j = w A_j / (2 eps) <lambda_j + eps p_hat_j>^2        [N mm]
 //! ```
 //!
-//! with `A_j` frozen for the step. Its gradient is the contact force
+//! with `A_j` frozen for the step (at its start). Its gradient is the contact force
 //! `f = -w p_j dg_j/du` and its Hessian where `p_j > 0`
 //!
 //! ```text
@@ -118,6 +118,12 @@ pub struct MortarContact {
     tests: Vec<Option<SurfaceTestFunctions>>,
     /// The (slave, master) surfaces that pressed when the step started.
     pressed_at_start: BTreeSet<(usize, usize)>,
+    /// The covered part of each node's support when the step started, the
+    /// `A_j` of the module docs \[mm^2\]: frozen, so that the force is the
+    /// gradient of the energy and the tangent its Hessian (read afresh,
+    /// a node closed at the start, whose gap `g_j / A_j` is its offset,
+    /// had a force 6 % off the gradient on bcc at level 1).
+    areas: BTreeMap<Key, f64>,
 }
 
 /// The part of a node's support the master surface covers, `sum_k D_jk =
@@ -156,6 +162,7 @@ impl MortarContact {
             passes: Vec::new(),
             tests: vec![None; n],
             pressed_at_start: BTreeSet::new(),
+            areas: BTreeMap::new(),
         })
     }
 
@@ -227,6 +234,21 @@ impl MortarContact {
             .filter(|(_, st)| st.lambda > 0.0)
             .map(|(&(s, _, m), _)| (s, m))
             .collect();
+        self.areas = self
+            .gaps(&x, Derivatives::Value)
+            .into_iter()
+            .filter_map(|(s, m, g)| {
+                let k = self.surfaces[s].nodes.binary_search(&g.node).ok()?;
+                Some(((s, k, m), covered(&g)))
+            })
+            .collect();
+    }
+
+    /// The `A_j` of the node `key` whose weighted gap is `g`: the one
+    /// frozen at the step's start, or (a node with no candidate pair then)
+    /// its covered area now.
+    fn area(&self, key: Key, g: &WeightedGap) -> f64 {
+        self.areas.get(&key).copied().unwrap_or_else(|| covered(g))
     }
 
     /// At a converged state `x`: the candidate pairs remade; returns how
@@ -304,8 +326,8 @@ impl MortarContact {
         let band = -NEAR_BAND * self.settings.search_distance;
         let values = self.gaps(x, Derivatives::Value);
         let reading = |s: usize, m: usize, g: &WeightedGap| -> Option<(usize, f64, f64)> {
-            let area = covered(g);
             let k = self.surfaces[s].nodes.binary_search(&g.node).ok()?;
+            let area = self.area((s, k, m), g);
             if !(area > 0.0) {
                 return None;
             }
@@ -377,11 +399,11 @@ impl MortarContact {
         let mut terms: Vec<ContactTerm> = gaps
             .into_par_iter()
             .filter_map(|(s, m, g)| {
-                let area = covered(&g);
+                let k = self.surfaces[s].nodes.binary_search(&g.node).ok()?;
+                let area = self.area((s, k, m), &g);
                 if !(area > 0.0) {
                     return None;
                 }
-                let k = self.surfaces[s].nodes.binary_search(&g.node).ok()?;
                 let st = self.node_state((s, k, m));
                 let penetration = -g.gap / area + st.offset;
                 let pressure = (st.lambda + eps * penetration).max(0.0);
