@@ -131,7 +131,7 @@ class SolverSettings:
         ``"mortar"`` measures the contact segment to segment instead of
         node to facet: each slave node's gap is the mean over its support
         of the distance to the other surface (a weighted gap, integrated
-        facet pair by facet pair on the hexahedra's bilinear faces), so
+        facet pair by facet pair on the same flat triangles), so
         that the forces vary smoothly as nodes slide over the other
         surface's facets and a uniform pressure passes between non-matching
         meshes exactly (the contact patch test). Frictionless contact only.
