@@ -27,10 +27,12 @@
 
 pub mod broad;
 pub mod clip;
+mod clip_gradient;
 pub mod contact;
 pub mod dual;
 pub mod normals;
 mod pair_derivatives;
+mod pair_gradient;
 pub mod quadrature;
 pub mod segment;
 pub mod trace;

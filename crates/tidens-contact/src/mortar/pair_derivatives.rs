@@ -9,6 +9,11 @@
 //! constant: their derivatives are chained by the caller, once per node
 //! ([`crate::mortar::weighted_gap`]). `g_j = n_j . v_j` is linear in `n_j`,
 //! so `v_j` is all the pair has to give for that.
+//!
+//! The weighted gaps' Hessians come from here; their gradients from the
+//! chain rule in `f64` ([`crate::mortar::pair_gradient`]), several times
+//! faster, of which this is the reference (the same numbers to
+//! round-off).
 
 use nalgebra::{Const, DMatrix, U1, Vector3};
 use num_dual::{Dual2SVec64, DualSVec64};
@@ -20,7 +25,7 @@ use crate::mortar::trace::{AdScalar, Facet};
 
 /// By slot `j` and component `c`, the gradient of `v_jc` over the pair's
 /// variables.
-type Gradients = [[Vec<f64>; 3]; 4];
+pub(crate) type Gradients = [[Vec<f64>; 3]; 4];
 
 /// A pair's `v_j` with derivatives: value, then by slot `j` and
 /// component `c` the gradient (and Hessian) over the pair's dofs.

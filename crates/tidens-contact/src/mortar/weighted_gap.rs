@@ -19,11 +19,11 @@
 //! d2g_j = sum_c (n_jc d2V_jc + V_jc d2n_jc + dn_jc (x) dV_jc + dV_jc (x) dn_jc)
 //! ```
 //!
-//! `dV_j` and `d2V_j`, pair by pair, by forward-mode automatic
-//! differentiation over the pair's node coordinates (`DualSVec64<N>`, or
-//! `Dual2SVec64<N>` for the Hessian, `N = 3 (n_s + n_m)`: 18 to 24) with
-//! the normals held constant; `dn_j` and `d2n_j` by
-//! [`normal_derivatives`]. The Hessian is for exact tangents in tests:
+//! `dV_j`, pair by pair over the pair's node coordinates (`N = 3 (n_s +
+//! n_m)`: 18 to 24) with the normals held constant, by the chain rule in
+//! `f64` ([`pair_gradient`]); `d2V_j` by forward-mode automatic
+//! differentiation (`Dual2SVec64<N>`, [`pair_derivatives`]); `dn_j` and
+//! `d2n_j` by [`normal_derivatives`]. The Hessian is for exact tangents in tests:
 //! every dual number then carries an `N x N` matrix, and the pairs are
 //! integrated one after another on a thread with a large stack; values
 //! and gradients pair by pair in parallel (rayon), summed in the pairs'
@@ -39,6 +39,7 @@ use crate::mortar::clip::clip;
 use crate::mortar::dual::SurfaceTestFunctions;
 use crate::mortar::normals::{NodeRing, nodal_normal, normal_derivatives};
 use crate::mortar::pair_derivatives::{PairDerivatives, pair_derivatives};
+use crate::mortar::pair_gradient::pair_gradient;
 use crate::mortar::quadrature::element_rule;
 use crate::mortar::segment::integrate_pair;
 use crate::mortar::trace::{Facet, Trace};
@@ -136,16 +137,19 @@ fn pair_contribution(
     let n: [Vector3<f64>; 4] = snodes.map(|k| normals[&k]);
     let t = &test.facets[sf];
     let result = match derivatives {
-        Derivatives::Value | Derivatives::Mortar => integrate_pair(&s, &m, &n, t)?.map(|integrals| PairDerivatives {
-            integrals,
-            dofs: Vec::new(),
-            gradient: Default::default(),
-            hessian: None,
-        }),
+        Derivatives::Value | Derivatives::Mortar => {
+            integrate_pair(&s, &m, &n, t)?.map(|integrals| PairDerivatives {
+                integrals,
+                dofs: Vec::new(),
+                gradient: Default::default(),
+                hessian: None,
+            })
+        }
         // Most candidates do not overlap: find out in f64 before any dual
         // number is made.
         _ if clip(&s, &m).is_none() => None,
-        _ => pair_derivatives(&s, &m, &n, t, derivatives == Derivatives::Hessian)?,
+        Derivatives::Gradient => pair_gradient(&s, &m, &n, t)?,
+        Derivatives::Hessian => pair_derivatives(&s, &m, &n, t, true)?,
     };
     Ok(result.map(|mut p| {
         let (ns, nm) = (s.node_count(), m.node_count());
