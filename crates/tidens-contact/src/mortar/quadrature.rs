@@ -120,6 +120,38 @@ fn residual<T: AdScalar>(trace: Trace, p: &[[T; 2]; 4], z: [T; 2], xi: [T; 2]) -
     [sub(f, z), a, b]
 }
 
+/// Newton on the bilinear planar map of the projected quad nodes `p`,
+/// written `z(xi) = c + xi a + eta b + xi eta d` (see
+/// [`Expansion`](crate::mortar::trace::Expansion)), from the inverse of its
+/// affine part at the centre (exact on a parallelogram; two or three steps
+/// then converge): `xi` and the last step, or the iterations done and the
+/// last step if it did not converge.
+fn bilinear_inverse(p: &[[f64; 2]; 4], z: [f64; 2]) -> Result<([f64; 2], f64), (usize, f64)> {
+    let e = |w: [f64; 4]| {
+        [0, 1].map(|c| 0.25 * (w[0] * p[0][c] + w[1] * p[1][c] + w[2] * p[2][c] + w[3] * p[3][c]))
+    };
+    let c = e([1.0, 1.0, 1.0, 1.0]);
+    let a = e([-1.0, 1.0, 1.0, -1.0]);
+    let b = e([-1.0, -1.0, 1.0, 1.0]);
+    let d = e([1.0, -1.0, 1.0, -1.0]);
+    let r = sub(c, z);
+    let mut xi = solve2(a, b, r).map_or([0.0, 0.0], |d| [-d[0], -d[1]]);
+    let mut step = f64::INFINITY;
+    for it in 0..MAX_NEWTON {
+        let [s, t] = xi;
+        let f = [0, 1].map(|k| r[k] + a[k] * s + b[k] * t + d[k] * (s * t));
+        let ja = [a[0] + d[0] * t, a[1] + d[1] * t];
+        let jb = [b[0] + d[0] * s, b[1] + d[1] * s];
+        let dx = solve2(ja, jb, f).ok_or((it, step))?;
+        xi = sub(xi, dx);
+        step = dx[0].abs().max(dx[1].abs());
+        if step < INVERSE_TOLERANCE {
+            return Ok((xi, step));
+        }
+    }
+    Err((MAX_NEWTON, step))
+}
+
 /// The parametric coordinates `xi` of the point `z` of the auxiliary
 /// plane on the planar map of a facet of `trace` whose projected nodes are
 /// `p` (see the module docs).
@@ -139,28 +171,9 @@ pub fn inverse_map<T: AdScalar>(
             solve2(sub(p[1], p[0]), sub(p[2], p[0]), sub(z, p[0])).ok_or_else(|| fail(0, f64::NAN))
         }
         Trace::Quad4 => {
-            let pr = p.map(|q| q.map(|v| v.re()));
-            let zr = z.map(|v| v.re());
-            // Start from the inverse of the map's affine part (exact on a
-            // parallelogram): two or three steps then converge.
-            let centre = [0.0, 0.0];
-            let [f, a, b] = residual(trace, &pr, zr, centre);
-            let mut xi = solve2(a, b, f).map_or(centre, |d| sub(centre, d));
-            let mut converged = false;
-            let mut step = f64::INFINITY;
-            for it in 0..MAX_NEWTON {
-                let [f, a, b] = residual(trace, &pr, zr, xi);
-                let d = solve2(a, b, f).ok_or_else(|| fail(it, step))?;
-                xi = sub(xi, d);
-                step = d[0].abs().max(d[1].abs());
-                if step < INVERSE_TOLERANCE {
-                    converged = true;
-                    break;
-                }
-            }
-            if !converged {
-                return Err(fail(MAX_NEWTON, step));
-            }
+            let pr: [[f64; 2]; 4] = [0, 1, 2, 3].map(|k| [p[k][0].re(), p[k][1].re()]);
+            let zr = [z[0].re(), z[1].re()];
+            let (xi, step) = bilinear_inverse(&pr, zr).map_err(|(it, step)| fail(it, step))?;
             if T::NDERIV == 0 {
                 return Ok(xi.map(T::from));
             }

@@ -138,12 +138,7 @@ fn pair_contribution(
     let t = &test.facets[sf];
     let result = match derivatives {
         Derivatives::Value | Derivatives::Mortar => {
-            integrate_pair(&s, &m, &n, t)?.map(|integrals| PairDerivatives {
-                integrals,
-                dofs: Vec::new(),
-                gradient: Default::default(),
-                hessian: None,
-            })
+            integrate_pair(&s, &m, &n, t)?.map(PairDerivatives::values)
         }
         // Most candidates do not overlap: find out in f64 before any dual
         // number is made.
@@ -185,13 +180,14 @@ fn accumulate(
         for (l, &n) in mnodes.iter().enumerate() {
             *sum.m.entry(n).or_default() += p.integrals.m[j][l];
         }
-        if p.dofs.is_empty() || p.gradient[j][0].is_empty() {
+        if p.dofs.is_empty() || p.gradient.is_empty() {
             continue;
         }
+        let g = [0, 1, 2].map(|c| p.gradient(j, c));
         for (i, &dof) in p.dofs.iter().enumerate() {
             let e = sum.dv.entry(dof).or_default();
             for c in 0..3 {
-                e[c] += p.gradient[j][c][i];
+                e[c] += g[c][i];
             }
         }
         if let Some(h) = &p.hessian {
@@ -254,17 +250,15 @@ pub fn weighted_gaps(
     let contribution = |&pair: &(usize, usize)| {
         pair_contribution(slave, master, x, pair, &normals, test, derivatives)
     };
-    let contributions: Vec<Option<PairDerivatives>> = if derivatives == Derivatives::Hessian {
+    // Collected by index (no reallocation), the errors read in the pairs'
+    // order.
+    type Contribution = Result<Option<PairDerivatives>, MortarError>;
+    let contributions: Vec<Contribution> = if derivatives == Derivatives::Hessian {
         // A second-order dual number carries an N x N matrix (4.6 kB at N =
         // 24): one pair's integration needs more than a thread's default
         // stack (2 MiB). The pairs go one after another on a thread with a
         // large one (or, if it cannot be made, on this one).
-        let run = || {
-            pairs
-                .iter()
-                .map(contribution)
-                .collect::<Result<Vec<_>, _>>()
-        };
+        let run = || pairs.iter().map(contribution).collect::<Vec<_>>();
         std::thread::scope(|scope| {
             match std::thread::Builder::new()
                 .stack_size(HESSIAN_STACK)
@@ -275,12 +269,9 @@ pub fn weighted_gaps(
                     .unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
                 Err(_) => run(),
             }
-        })?
+        })
     } else {
-        pairs
-            .par_iter()
-            .map(contribution)
-            .collect::<Result<_, _>>()?
+        pairs.par_iter().map(contribution).collect()
     };
     let mut sums: BTreeMap<usize, Sum> = BTreeMap::new();
     let (ns, nm) = (
@@ -288,7 +279,7 @@ pub fn weighted_gaps(
         Trace::of_kind(master.kind).node_count(),
     );
     for (&(sf, mf), p) in pairs.iter().zip(&contributions) {
-        if let Some(p) = p {
+        if let Some(p) = p.as_ref().map_err(Clone::clone)? {
             accumulate(
                 &mut sums,
                 p,
