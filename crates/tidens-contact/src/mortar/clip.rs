@@ -18,7 +18,8 @@
 //!    projected area is `|n_m . n0|` times its area, so a pair reaches
 //!    the threshold with an overlap that goes to zero: the skip does not
 //!    make the gaps jump.
-//! 2. The slave nodes `P(x_k)` run counter-clockwise in the plane; the
+//! 2. The slave nodes `P(x_k)` run counter-clockwise in the plane (a
+//!    pair whose projected nodes' bounding boxes are apart is skipped); the
 //!    master's `P(y_l)` run clockwise (it faces the other way) and are
 //!    reversed. Sutherland-Hodgman clips the master polygon against each
 //!    edge `(a, b)` of the slave polygon: a point `q` is inside while
@@ -268,6 +269,21 @@ fn clip_convex<T: AdScalar>(
     (kept.len() >= 3).then_some(kept)
 }
 
+/// Whether the bounding boxes of the polygons `a` and `b` are apart (then
+/// so are the polygons: no clipping needed).
+fn apart<T: AdScalar>(a: &[Point<T>], b: &[Point<T>]) -> bool {
+    let bounds = |p: &[Point<T>], c: usize| {
+        p.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+                (lo.min(q[c].re()), hi.max(q[c].re()))
+            })
+    };
+    (0..2).any(|c| {
+        let ((la, ha), (lb, hb)) = (bounds(a, c), bounds(b, c));
+        ha < lb || hb < la
+    })
+}
+
 /// The overlap of `slave` and `master` (module docs), None if they do not
 /// face each other or do not overlap.
 pub fn clip<T: AdScalar>(slave: &Facet<T>, master: &Facet<T>) -> Option<Clip<T>> {
@@ -279,6 +295,9 @@ pub fn clip<T: AdScalar>(slave: &Facet<T>, master: &Facet<T>) -> Option<Clip<T>>
     let nm = master.node_count();
     let s: [Point<T>; 4] = std::array::from_fn(|k| plane.project(&slave.x[k.min(ns - 1)]));
     let m: [Point<T>; 4] = std::array::from_fn(|l| plane.project(&master.x[l.min(nm - 1)]));
+    if apart(&s[..ns], &m[..nm]) {
+        return None;
+    }
     let mut made: Vec<(Point<T>, Origin)> = (0..nm).map(|l| (m[l], Origin::Master(l))).collect();
     let subject: Vec<usize> = (0..nm).rev().collect();
     let polygon = &s[..ns];

@@ -39,7 +39,7 @@ use crate::mortar::clip::clip;
 use crate::mortar::clip_gradient::{Grad, axpy, clip_gradients};
 use crate::mortar::dual::TestFunctions;
 use crate::mortar::pair_derivatives::{Gradients, PairDerivatives};
-use crate::mortar::quadrature::{TRIANGLE_7, inverse_map};
+use crate::mortar::quadrature::{TRIANGLE_7, inverse_maps};
 use crate::mortar::segment::PairIntegrals;
 use crate::mortar::trace::{Expansion, Facet, Trace};
 
@@ -117,17 +117,19 @@ fn gradient_n<const N: usize>(
             axpy(&mut d_area, 0.5 * e1[0], &cell[2].dz[1]);
             axpy(&mut d_area, 0.5 * (e1[1] - e2[1]), &cell[0].dz[0]);
             axpy(&mut d_area, 0.5 * (e2[0] - e1[0]), &cell[0].dz[1]);
-            for (l, w) in &TRIANGLE_7 {
-                let z =
-                    [0, 1].map(|c| cell[0].z[c] * l[0] + cell[1].z[c] * l[1] + cell[2].z[c] * l[2]);
+            let zs: [[f64; 2]; 7] = TRIANGLE_7.map(|(l, _)| {
+                [0, 1].map(|c| cell[0].z[c] * l[0] + cell[1].z[c] * l[1] + cell[2].z[c] * l[2])
+            });
+            let xis = inverse_maps(s.trace, &ps, &zs)?;
+            let etas = inverse_maps(m.trace, &pm, &zs)?;
+            for (g, (l, w)) in TRIANGLE_7.iter().enumerate() {
+                let (xi, eta) = (xis[g], etas[g]);
                 let mut dz = [[0.0; N]; 2];
                 for c in 0..2 {
                     for a in 0..3 {
                         axpy(&mut dz[c], l[a], &cell[a].dz[c]);
                     }
                 }
-                let xi = inverse_map(s.trace, &ps, z)?;
-                let eta = inverse_map(m.trace, &pm, z)?;
                 let dxi = parameter_gradient(s.trace, xi, &ps, dps, &dz);
                 let deta = parameter_gradient(m.trace, eta, &pm, dpm, &dz);
                 // The slave's measure over the plane's, r = |a| / (a . n0).
