@@ -289,26 +289,49 @@ pub fn weighted_gaps(
         }
     }
     let sums: Vec<(usize, Sum)> = sums.into_iter().collect();
+    // Each facet's integrals of its test functions, once for all its nodes.
+    let facets: Vec<usize> = sums
+        .iter()
+        .flat_map(|&(node, _)| ring.facets(index(node)).iter().map(|&(f, _)| f))
+        .collect::<BTreeSet<usize>>()
+        .into_iter()
+        .collect();
+    let integrals: Vec<[f64; 4]> = facets
+        .par_iter()
+        .map(|&f| test_integrals(slave, test, x, f, strace))
+        .collect();
+    let support = |i: usize| -> f64 {
+        ring.facets(i)
+            .iter()
+            .map(|&(f, c)| integrals[facets.binary_search(&f).unwrap_or(0)][c])
+            .sum()
+    };
     Ok(sums
         .into_par_iter()
         .map(|(node, sum)| {
             let i = index(node);
-            let area = support_integral(slave, &ring, test, x, i, strace);
-            finish(slave, &ring, x, node, i, area, sum, derivatives)
+            let normal = normals.get(&node).copied();
+            finish(
+                slave,
+                &ring,
+                x,
+                (node, i, normal),
+                support(i),
+                sum,
+                derivatives,
+            )
         })
         .collect())
 }
 
-/// The weighted gap of `node` (of index `i` in `slave.nodes`, support
-/// integral `area`) from its pairs' sums: `g_j = n_j . V_j` and the chain
-/// rule of the module docs.
-#[allow(clippy::too_many_arguments)]
+/// The weighted gap of `node` (of index `i` in `slave.nodes`, nodal
+/// normal `normal` if known, support integral `area`) from its pairs'
+/// sums: `g_j = n_j . V_j` and the chain rule of the module docs.
 fn finish(
     slave: &ContactSurface,
     ring: &NodeRing,
     x: &[[f64; 3]],
-    node: usize,
-    i: usize,
+    (node, i, normal): (usize, usize, Option<Vector3<f64>>),
     area: f64,
     sum: Sum,
     derivatives: Derivatives,
@@ -324,7 +347,7 @@ fn finish(
         hessian: None,
     };
     if derivatives == Derivatives::Value {
-        let n = nodal_normal(slave, ring, i, x);
+        let n = normal.unwrap_or_else(|| nodal_normal(slave, ring, i, x));
         gap.gap = n.dot(&sum.v);
         gap.normal = n.into();
         return gap;
@@ -391,24 +414,20 @@ fn finish(
     gap
 }
 
-/// `A_j = sum_{e at j} int_e Phi_j dA` of the node of index `i`, by each
-/// facet's rule in the coordinates `x`.
-fn support_integral(
+/// `int_e Phi_j dA` of facet `f`'s test functions by its rule in the
+/// coordinates `x` (`A_j` sums them over the facets at `j`).
+fn test_integrals(
     slave: &ContactSurface,
-    ring: &NodeRing,
     test: &SurfaceTestFunctions,
     x: &[[f64; 3]],
-    i: usize,
+    f: usize,
     trace: Trace,
-) -> f64 {
+) -> [f64; 4] {
+    let facet = Facet::of_surface(slave, f, x);
     let rule = element_rule(trace);
-    ring.facets(i)
-        .iter()
-        .map(|&(f, c)| {
-            let facet = Facet::of_surface(slave, f, x);
-            rule.iter()
-                .map(|&(xi, w)| w * test.facets[f].eval(&trace.shape(xi))[c] * facet.jacobian(xi))
-                .sum::<f64>()
-        })
-        .sum()
+    std::array::from_fn(|c| {
+        rule.iter()
+            .map(|&(xi, w)| w * test.facets[f].eval(&trace.shape(xi))[c] * facet.jacobian(xi))
+            .sum::<f64>()
+    })
 }
