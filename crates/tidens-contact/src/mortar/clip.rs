@@ -50,7 +50,7 @@
 //! cells (the choices, inside or out, are made on the real parts).
 //! Every vertex made is recorded with how it was made ([`Origin`]), so
 //! that the same steps can be differentiated by hand
-//! ([`crate::mortar::clip_gradient`]).
+//! (the crate's `mortar::clip_gradient`).
 
 use nalgebra::Vector3;
 

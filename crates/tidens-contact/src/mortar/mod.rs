@@ -18,7 +18,8 @@
 //! clipped and cut into triangles ([`clip`]), whose 7-point rules
 //! ([`quadrature`]) give the pair's contributions ([`segment`]);
 //! [`weighted_gap`] sums them over a node's facets and differentiates
-//! them by forward-mode automatic differentiation. `g_j / A_j` is the
+//! them (gradients by the chain rule in `f64`, Hessians by forward-mode
+//! automatic differentiation). `g_j / A_j` is the
 //! node's mean gap \[mm\]: a uniform gap `delta` between flat surfaces
 //! gives `delta` exactly (the contact patch test).
 //!

@@ -25,15 +25,17 @@
 //! - Tri3: `z = p_0 + xi (p_1 - p_0) + eta (p_2 - p_0)`, a 2 x 2 linear
 //!   solve;
 //! - Quad4: Newton on the bilinear map from the inverse of its affine
-//!   part at the centre, `xi <- xi -
-//!   (dz/dxi)^-1 (z(xi) - z)`, in `f64` until the step, or the one that
-//!   would follow it, is below [`INVERSE_TOLERANCE`]; then `T::NDERIV` more steps in the scalar
-//!   `T`: from a converged real part each step makes one more order of
-//!   the dual parts exact (the derivatives of the implicit function `xi(z,
-//!   p)`). The first of them keeps the shape functions and the Jacobian
-//!   in `f64` (xi has no dual part yet): `xi = xi_0 - J(xi_0)^-1 (sum_k
-//!   N_k(xi_0) p_k - z)`, the implicit function theorem's first
-//!   derivative at a fifth of the cost of a step all in `T`.
+//!   part at the centre, `xi <- xi - (dz/dxi)^-1 (z(xi) - z)`, in `f64`
+//!   until the step, or the one that would follow it (the residual after
+//!   a step `h` is `d h_1 h_2` exactly), is below [`INVERSE_TOLERANCE`];
+//!   a cell's seven points side by side. Then `T::NDERIV` more steps in
+//!   the scalar `T`: from a converged real part each step makes one more
+//!   order of the dual parts exact (the derivatives of the implicit
+//!   function `xi(z, p)`). The first of them keeps the shape functions
+//!   and the Jacobian in `f64` (xi has no dual part yet): `xi = xi_0 -
+//!   J(xi_0)^-1 (sum_k N_k(xi_0) p_k - z)`, the implicit function
+//!   theorem's first derivative at a fifth of the cost of a step all in
+//!   `T`.
 
 use crate::mortar::MortarError;
 use crate::mortar::trace::{AdScalar, Trace};

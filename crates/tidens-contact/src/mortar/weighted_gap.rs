@@ -21,8 +21,8 @@
 //!
 //! `dV_j`, pair by pair over the pair's node coordinates (`N = 3 (n_s +
 //! n_m)`: 18 to 24) with the normals held constant, by the chain rule in
-//! `f64` ([`pair_gradient`]); `d2V_j` by forward-mode automatic
-//! differentiation (`Dual2SVec64<N>`, [`pair_derivatives`]); `dn_j` and
+//! `f64` (`pair_gradient`); `d2V_j` by forward-mode automatic
+//! differentiation (`Dual2SVec64<N>`, `pair_derivatives`); `dn_j` and
 //! `d2n_j` by [`normal_derivatives`]. The Hessian is for exact tangents in tests:
 //! every dual number then carries an `N x N` matrix, and the pairs are
 //! integrated one after another on a thread with a large stack; values
