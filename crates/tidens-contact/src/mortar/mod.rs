@@ -44,7 +44,7 @@ pub use contact::{ANY_FACET, MortarCheckpoint, MortarContact};
 pub use dual::{SurfaceTestFunctions, TestBasis, TestFunctions};
 pub use segment::{PairIntegrals, integrate_pair};
 pub use trace::{AdScalar, Facet, Trace};
-pub use weighted_gap::{Derivatives, HessianBlock, WeightedGap, weighted_gaps};
+pub use weighted_gap::{Derivatives, HessianBlock, WeightedGap, weighted_gaps, weighted_gaps_of};
 
 use thiserror::Error;
 

@@ -164,14 +164,18 @@ fn pair_contribution(
 }
 
 /// Adds what pair `p` of slave facet nodes `snodes` and master facet nodes
-/// `mnodes` brings to the sums of its slave nodes.
+/// `mnodes` brings to the sums of its slave nodes (of those in `only`, if
+/// given).
 fn accumulate(
     sums: &mut BTreeMap<usize, Sum>,
     p: &PairDerivatives,
-    snodes: &[usize],
-    mnodes: &[usize],
+    (snodes, mnodes): (&[usize], &[usize]),
+    only: Option<&BTreeSet<usize>>,
 ) {
     for (j, &node) in snodes.iter().enumerate() {
+        if only.is_some_and(|nodes| !nodes.contains(&node)) {
+            continue;
+        }
         let sum = sums.entry(node).or_default();
         sum.v += p.integrals.gap_vector[j];
         for (k, &n) in snodes.iter().enumerate() {
@@ -217,6 +221,35 @@ pub fn weighted_gaps(
     pairs: &[(usize, usize)],
     test: &SurfaceTestFunctions,
     derivatives: Derivatives,
+) -> Result<Vec<WeightedGap>, MortarError> {
+    gaps_of(slave, master, x, pairs, test, derivatives, None)
+}
+
+/// The weighted gaps of the slave nodes `nodes` (global ids) only, those
+/// of them that overlap `master`: the same as [`weighted_gaps`] gives
+/// them, without the other nodes' sums and derivatives (a pair's facet
+/// brings three or four nodes, of which a caller may need one).
+pub fn weighted_gaps_of(
+    slave: &ContactSurface,
+    master: &ContactSurface,
+    x: &[[f64; 3]],
+    pairs: &[(usize, usize)],
+    test: &SurfaceTestFunctions,
+    derivatives: Derivatives,
+    nodes: &BTreeSet<usize>,
+) -> Result<Vec<WeightedGap>, MortarError> {
+    gaps_of(slave, master, x, pairs, test, derivatives, Some(nodes))
+}
+
+/// [`weighted_gaps`] of the nodes `only`, or of all.
+fn gaps_of(
+    slave: &ContactSurface,
+    master: &ContactSurface,
+    x: &[[f64; 3]],
+    pairs: &[(usize, usize)],
+    test: &SurfaceTestFunctions,
+    derivatives: Derivatives,
+    only: Option<&BTreeSet<usize>>,
 ) -> Result<Vec<WeightedGap>, MortarError> {
     for &(s, m) in pairs {
         if s >= slave.facets.len() || m >= master.facets.len() || s >= test.facets.len() {
@@ -280,12 +313,8 @@ pub fn weighted_gaps(
     );
     for (&(sf, mf), p) in pairs.iter().zip(&contributions) {
         if let Some(p) = p.as_ref().map_err(Clone::clone)? {
-            accumulate(
-                &mut sums,
-                p,
-                &slave.facets[sf][..ns],
-                &master.facets[mf][..nm],
-            );
+            let nodes = (&slave.facets[sf][..ns], &master.facets[mf][..nm]);
+            accumulate(&mut sums, p, nodes, only);
         }
     }
     let sums: Vec<(usize, Sum)> = sums.into_iter().collect();
