@@ -278,7 +278,10 @@ impl StateSnapshot {
     /// How many slave-master pairs carry a multiplier or a tie.
     pub fn len(&self) -> usize {
         self.state.iter().flatten().map(Vec::len).sum::<usize>()
-            + self.mortar.as_ref().map_or(0, mortar::MortarCheckpoint::len)
+            + self
+                .mortar
+                .as_ref()
+                .map_or(0, mortar::MortarCheckpoint::len)
     }
 
     pub fn is_empty(&self) -> bool {
@@ -522,7 +525,11 @@ impl ParticleContact {
         let master = &self.surfaces[t.master.0];
         let mut dofs: Vec<usize> = t.dofs[..3].to_vec();
         for &f in master.ring(t.master.1) {
-            dofs.extend(master.facets[f].iter().flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]));
+            dofs.extend(
+                master.facets[f]
+                    .iter()
+                    .flat_map(|&n| [3 * n, 3 * n + 1, 3 * n + 2]),
+            );
         }
         dofs.sort_unstable();
         dofs.dedup();

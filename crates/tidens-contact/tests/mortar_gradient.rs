@@ -13,12 +13,13 @@
 #[path = "support/mortar_meshes.rs"]
 mod meshes;
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 use meshes::{Lcg, patch, polar};
 use tidens_contact::ContactSurface;
 use tidens_contact::mortar::{
     Derivatives, SurfaceTestFunctions, TestBasis, WeightedGap, candidate_pairs, weighted_gaps,
+    weighted_gaps_of,
 };
 
 struct Scene {
@@ -226,5 +227,33 @@ fn hessians_match_central_differences_of_the_gradients() {
             "triangles {triangles}: Hessians of {} nodes, largest relative difference {worst:.1e}",
             g0.len()
         );
+    }
+}
+
+#[test]
+fn the_gaps_of_some_nodes_are_those_of_all() {
+    for triangles in [false, true] {
+        let scene = Scene::new(triangles, TestBasis::Dual, 4);
+        for d in [Derivatives::Value, Derivatives::Gradient] {
+            let all = scene.gaps(&scene.x, d);
+            // Every third node with a gap, and a node that has none.
+            let mut nodes: BTreeSet<usize> = all.keys().copied().step_by(3).collect();
+            nodes.insert(usize::MAX);
+            let some = weighted_gaps_of(
+                &scene.slave,
+                &scene.master,
+                &scene.x,
+                &scene.pairs,
+                &scene.test,
+                d,
+                &nodes,
+            )
+            .unwrap();
+            assert_eq!(some.len(), nodes.len() - 1);
+            for g in &some {
+                assert!(!g.gradient.is_empty() || d == Derivatives::Value);
+                assert_eq!(g, &all[&g.node]);
+            }
+        }
     }
 }

@@ -386,19 +386,19 @@ fn the_whole_contact_transmits_a_uniform_pressure_uniformly_with_mortar() {
     for st in [false, true] {
         for mt in [false, true] {
             let (x, s, m) = scene(delta, 2.6, st, mt);
-            let mut mortar = ParticleContact::mortar(
-                vec![s.clone(), m.clone()],
-                settings,
-                TestBasis::Standard,
-            )
-            .unwrap();
+            let mut mortar =
+                ParticleContact::mortar(vec![s.clone(), m.clone()], settings, TestBasis::Standard)
+                    .unwrap();
             let mortar_error = pipeline_error(&mut mortar, &x, p);
             let mut node_to_facet = ParticleContact::new(vec![s, m], settings).unwrap();
             let ntf_error = pipeline_error(&mut node_to_facet, &x, p);
             println!(
                 "patch test (slave tris {st}, master tris {mt}): largest nodal force error over p A: mortar {mortar_error:.1e}, node to facet {ntf_error:.1e}"
             );
-            assert!(mortar_error < 1e-6, "slave tris {st}, master tris {mt}: {mortar_error:e}");
+            assert!(
+                mortar_error < 1e-6,
+                "slave tris {st}, master tris {mt}: {mortar_error:e}"
+            );
         }
     }
 }

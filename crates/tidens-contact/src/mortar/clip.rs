@@ -18,7 +18,8 @@
 //!    projected area is `|n_m . n0|` times its area, so a pair reaches
 //!    the threshold with an overlap that goes to zero: the skip does not
 //!    make the gaps jump.
-//! 2. The slave nodes `P(x_k)` run counter-clockwise in the plane; the
+//! 2. The slave nodes `P(x_k)` run counter-clockwise in the plane (a
+//!    pair whose projected nodes' bounding boxes are apart is skipped); the
 //!    master's `P(y_l)` run clockwise (it faces the other way) and are
 //!    reversed. Sutherland-Hodgman clips the master polygon against each
 //!    edge `(a, b)` of the slave polygon: a point `q` is inside while
@@ -47,6 +48,9 @@
 //! Everything is generic over the scalar, so the derivatives of the
 //! integrals flow through the plane, the intersection points and the
 //! cells (the choices, inside or out, are made on the real parts).
+//! Every vertex made is recorded with how it was made ([`Origin`]), so
+//! that the same steps can be differentiated by hand
+//! (the crate's `mortar::clip_gradient`).
 
 use nalgebra::Vector3;
 
@@ -119,41 +123,56 @@ fn cross<T: AdScalar>(a: &Point<T>, b: &Point<T>) -> T {
     a[0] * b[1] - a[1] * b[0]
 }
 
+/// How a vertex of the overlap was made ([`Clip::made`]): what a
+/// derivative by hand retraces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Origin {
+    /// The projected master node `l`.
+    Master(usize),
+    /// The edge from made vertex `p` to made vertex `q` cut by the line
+    /// through the projected slave nodes `a -> b`: `p + (q - p) s_p / (s_p -
+    /// s_q)`, `s = (b - a) x (. - a)`.
+    Cut {
+        p: usize,
+        q: usize,
+        a: usize,
+        b: usize,
+    },
+}
+
 /// One convex (or at least simple) piece of the overlap.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ClipPolygon<T: AdScalar> {
     /// Counter-clockwise vertices.
     pub vertices: Vec<Point<T>>,
+    /// The vertices' entries in [`Clip::made`].
+    pub made: Vec<usize>,
     /// The area centroid `q_c`.
     pub centroid: Point<T>,
     /// The area `A` \[mm^2\] (in the plane).
     pub area: T,
 }
 
-impl<T: AdScalar> ClipPolygon<T> {
-    /// The polygon of `vertices` (at least three), with its area and
-    /// centroid (relative to the first vertex, for round-off).
-    fn new(vertices: Vec<Point<T>>) -> Self {
-        let q0 = vertices[0];
-        let n = vertices.len();
-        let zero = T::from(0.0);
-        let (mut area2, mut c) = (zero, [zero; 2]);
-        for i in 1..n - 1 {
-            let (a, b) = (sub(&vertices[i], &q0), sub(&vertices[i + 1], &q0));
-            let w = cross(&a, &b);
-            area2 += w;
-            c[0] += (a[0] + b[0]) * w;
-            c[1] += (a[1] + b[1]) * w;
-        }
-        let area = area2 * 0.5;
-        let centroid = [q0[0] + c[0] / (area * 6.0), q0[1] + c[1] / (area * 6.0)];
-        Self {
-            vertices,
-            centroid,
-            area,
-        }
+/// The area and the area centroid of the polygon `vertices` (at least
+/// three), relative to the first vertex for round-off.
+fn area_centroid<T: AdScalar>(vertices: &[Point<T>]) -> (T, Point<T>) {
+    let q0 = vertices[0];
+    let n = vertices.len();
+    let zero = T::from(0.0);
+    let (mut area2, mut c) = (zero, [zero; 2]);
+    for i in 1..n - 1 {
+        let (a, b) = (sub(&vertices[i], &q0), sub(&vertices[i + 1], &q0));
+        let w = cross(&a, &b);
+        area2 += w;
+        c[0] += (a[0] + b[0]) * w;
+        c[1] += (a[1] + b[1]) * w;
     }
+    let area = area2 * 0.5;
+    let centroid = [q0[0] + c[0] / (area * 6.0), q0[1] + c[1] / (area * 6.0)];
+    (area, centroid)
+}
 
+impl<T: AdScalar> ClipPolygon<T> {
     /// The `n` cells `(q_c, q_i, q_{i+1})`.
     pub fn cells(&self) -> impl Iterator<Item = [Point<T>; 3]> + '_ {
         let n = self.vertices.len();
@@ -172,6 +191,9 @@ pub struct Clip<T: AdScalar> {
     /// The overlap: one polygon, two if the projected slave quad is not
     /// convex.
     pub pieces: Vec<ClipPolygon<T>>,
+    /// Every vertex the clipping made, in order (the master nodes first),
+    /// and how.
+    pub made: Vec<(Point<T>, Origin)>,
 }
 
 /// Whether `master`'s centre normal points against the plane normal `n0`
@@ -182,56 +204,84 @@ pub fn facing<T: AdScalar>(plane: &AuxPlane<T>, master: &Facet<T>) -> bool {
     nm.dot(&n0) < -FACING * nm.norm()
 }
 
-/// `subject` clipped by the half-plane left of the directed line `a -> b`.
-fn clip_edge<T: AdScalar>(subject: &[Point<T>], a: &Point<T>, b: &Point<T>) -> Vec<Point<T>> {
-    let e = sub(b, a);
-    let side = |q: &Point<T>| cross(&e, &sub(q, a));
+/// The made vertices `subject` clipped by the half-plane left of the
+/// directed line through the projected slave nodes `s[a] -> s[b]`; the cuts
+/// are appended to `made`.
+fn clip_edge<T: AdScalar>(
+    made: &mut Vec<(Point<T>, Origin)>,
+    subject: &[usize],
+    s: &[Point<T>; 4],
+    (a, b): (usize, usize),
+) -> Vec<usize> {
+    let e = sub(&s[b], &s[a]);
+    let side = |q: &Point<T>| cross(&e, &sub(q, &s[a]));
     let n = subject.len();
     let mut out = Vec::with_capacity(n + 2);
     for i in 0..n {
-        let (p, q) = (&subject[i], &subject[(i + 1) % n]);
-        let (sp, sq) = (side(p), side(q));
+        let (ip, iq) = (subject[i], subject[(i + 1) % n]);
+        let (p, q) = (made[ip].0, made[iq].0);
+        let (sp, sq) = (side(&p), side(&q));
         let (p_in, q_in) = (sp.re() >= 0.0, sq.re() >= 0.0);
         if p_in {
-            out.push(*p);
+            out.push(ip);
         }
         if p_in != q_in {
             let t = sp / (sp - sq);
-            out.push([p[0] + (q[0] - p[0]) * t, p[1] + (q[1] - p[1]) * t]);
+            let cut = [p[0] + (q[0] - p[0]) * t, p[1] + (q[1] - p[1]) * t];
+            made.push((cut, Origin::Cut { p: ip, q: iq, a, b }));
+            out.push(made.len() - 1);
         }
     }
     out
 }
 
-/// `subject` clipped by the convex counter-clockwise polygon `clipper`,
-/// near-duplicate vertices merged (within `merge`); None if fewer than
-/// three are left.
+/// The made vertices `subject` clipped by the convex counter-clockwise
+/// polygon of the projected slave nodes `clipper`, near-duplicate vertices
+/// merged (within `merge`); None if fewer than three are left.
 fn clip_convex<T: AdScalar>(
-    subject: &[Point<T>],
-    clipper: &[Point<T>],
+    made: &mut Vec<(Point<T>, Origin)>,
+    subject: &[usize],
+    s: &[Point<T>; 4],
+    clipper: &[usize],
     merge: f64,
-) -> Option<Vec<Point<T>>> {
+) -> Option<Vec<usize>> {
     let mut poly = subject.to_vec();
     for i in 0..clipper.len() {
         if poly.len() < 3 {
             return None;
         }
-        poly = clip_edge(&poly, &clipper[i], &clipper[(i + 1) % clipper.len()]);
+        let edge = (clipper[i], clipper[(i + 1) % clipper.len()]);
+        poly = clip_edge(made, &poly, s, edge);
     }
-    let close = |a: &Point<T>, b: &Point<T>| {
-        let d = sub(a, b).map(|v| v.re());
+    let close = |a: usize, b: usize| {
+        let d = sub(&made[a].0, &made[b].0).map(|v| v.re());
         d[0] * d[0] + d[1] * d[1] <= merge * merge
     };
-    let mut kept: Vec<Point<T>> = Vec::with_capacity(poly.len());
+    let mut kept: Vec<usize> = Vec::with_capacity(poly.len());
     for p in poly {
-        if kept.last().is_none_or(|q| !close(q, &p)) {
+        if kept.last().is_none_or(|&q| !close(q, p)) {
             kept.push(p);
         }
     }
-    while kept.len() > 1 && close(&kept[kept.len() - 1], &kept[0]) {
+    while kept.len() > 1 && close(kept[kept.len() - 1], kept[0]) {
         kept.pop();
     }
     (kept.len() >= 3).then_some(kept)
+}
+
+/// Whether the bounding boxes of the polygons `a` and `b` are apart (then
+/// so are the polygons: no clipping needed).
+fn apart<T: AdScalar>(a: &[Point<T>], b: &[Point<T>]) -> bool {
+    let bounds = |p: &[Point<T>], c: usize| {
+        p.iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), q| {
+                (lo.min(q[c].re()), hi.max(q[c].re()))
+            })
+    };
+    (0..2).any(|c| {
+        let ((la, ha), (lb, hb)) = (bounds(a, c), bounds(b, c));
+        ha < lb || hb < la
+    })
 }
 
 /// The overlap of `slave` and `master` (module docs), None if they do not
@@ -245,7 +295,11 @@ pub fn clip<T: AdScalar>(slave: &Facet<T>, master: &Facet<T>) -> Option<Clip<T>>
     let nm = master.node_count();
     let s: [Point<T>; 4] = std::array::from_fn(|k| plane.project(&slave.x[k.min(ns - 1)]));
     let m: [Point<T>; 4] = std::array::from_fn(|l| plane.project(&master.x[l.min(nm - 1)]));
-    let subject: Vec<Point<T>> = (0..nm).rev().map(|l| m[l]).collect();
+    if apart(&s[..ns], &m[..nm]) {
+        return None;
+    }
+    let mut made: Vec<(Point<T>, Origin)> = (0..nm).map(|l| (m[l], Origin::Master(l))).collect();
+    let subject: Vec<usize> = (0..nm).rev().collect();
     let polygon = &s[..ns];
     let size = (0..ns)
         .map(|k| {
@@ -259,23 +313,29 @@ pub fn clip<T: AdScalar>(slave: &Facet<T>, master: &Facet<T>) -> Option<Clip<T>>
     };
     // The convex pieces of the slave polygon: itself, or the two triangles
     // of a quad split at its reflex corner.
-    let pieces: Vec<Vec<Point<T>>> = match (0..ns).find(|&k| !(turn(k) > 0.0)) {
+    let pieces: Vec<Vec<usize>> = match (0..ns).find(|&k| !(turn(k) > 0.0)) {
         Some(k) if ns == 4 => {
             let r = (k + 1) % 4;
             vec![
-                vec![s[r], s[(r + 1) % 4], s[(r + 2) % 4]],
-                vec![s[(r + 2) % 4], s[(r + 3) % 4], s[r]],
+                vec![r, (r + 1) % 4, (r + 2) % 4],
+                vec![(r + 2) % 4, (r + 3) % 4, r],
             ]
         }
-        _ => vec![polygon.to_vec()],
+        _ => vec![(0..ns).collect()],
     };
-    let slave_area = ClipPolygon::new(polygon.to_vec()).area.re();
+    let slave_area = area_centroid(polygon).0.re();
     let mut out = Vec::with_capacity(pieces.len());
     for piece in &pieces {
-        if let Some(v) = clip_convex(&subject, piece, MERGE * size) {
-            let p = ClipPolygon::new(v);
-            if p.area.re() >= MIN_AREA * slave_area {
-                out.push(p);
+        if let Some(kept) = clip_convex(&mut made, &subject, &s, piece, MERGE * size) {
+            let vertices: Vec<Point<T>> = kept.iter().map(|&i| made[i].0).collect();
+            let (area, centroid) = area_centroid(&vertices);
+            if area.re() >= MIN_AREA * slave_area {
+                out.push(ClipPolygon {
+                    vertices,
+                    made: kept,
+                    centroid,
+                    area,
+                });
             }
         }
     }
@@ -284,6 +344,7 @@ pub fn clip<T: AdScalar>(slave: &Facet<T>, master: &Facet<T>) -> Option<Clip<T>>
         slave: s,
         master: m,
         pieces: out,
+        made,
     })
 }
 

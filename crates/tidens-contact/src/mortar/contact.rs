@@ -48,7 +48,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{
     Derivatives, MortarError, SurfaceTestFunctions, TestBasis, WeightedGap, candidate_pairs,
-    weighted_gaps,
+    weighted_gaps, weighted_gaps_of,
 };
 use crate::{ContactEvaluation, ContactMode, ContactSettings, ContactSurface, ContactTerm};
 
@@ -362,13 +362,14 @@ impl MortarContact {
                     .copied()
                     .filter(|&(sf, _)| slave.facets[sf].iter().any(|n| nodes.contains(n)))
                     .collect();
-                let gaps = weighted_gaps(
+                let gaps = weighted_gaps_of(
                     slave,
                     &self.surfaces[pass.master],
                     x,
                     &pairs,
                     test,
                     Derivatives::Gradient,
+                    nodes,
                 )
                 .ok()?;
                 Some(

@@ -18,7 +18,8 @@
 //! clipped and cut into triangles ([`clip`]), whose 7-point rules
 //! ([`quadrature`]) give the pair's contributions ([`segment`]);
 //! [`weighted_gap`] sums them over a node's facets and differentiates
-//! them by forward-mode automatic differentiation. `g_j / A_j` is the
+//! them (gradients by the chain rule in `f64`, Hessians by forward-mode
+//! automatic differentiation). `g_j / A_j` is the
 //! node's mean gap \[mm\]: a uniform gap `delta` between flat surfaces
 //! gives `delta` exactly (the contact patch test).
 //!
@@ -27,10 +28,12 @@
 
 pub mod broad;
 pub mod clip;
+mod clip_gradient;
 pub mod contact;
 pub mod dual;
 pub mod normals;
 mod pair_derivatives;
+mod pair_gradient;
 pub mod quadrature;
 pub mod segment;
 pub mod trace;
@@ -41,7 +44,7 @@ pub use contact::{ANY_FACET, MortarCheckpoint, MortarContact};
 pub use dual::{SurfaceTestFunctions, TestBasis, TestFunctions};
 pub use segment::{PairIntegrals, integrate_pair};
 pub use trace::{AdScalar, Facet, Trace};
-pub use weighted_gap::{Derivatives, HessianBlock, WeightedGap, weighted_gaps};
+pub use weighted_gap::{Derivatives, HessianBlock, WeightedGap, weighted_gaps, weighted_gaps_of};
 
 use thiserror::Error;
 

@@ -9,6 +9,11 @@
 //! constant: their derivatives are chained by the caller, once per node
 //! ([`crate::mortar::weighted_gap`]). `g_j = n_j . v_j` is linear in `n_j`,
 //! so `v_j` is all the pair has to give for that.
+//!
+//! The weighted gaps' Hessians come from here; their gradients from the
+//! chain rule in `f64` ([`crate::mortar::pair_gradient`]), several times
+//! faster, of which this is the reference (the same numbers to
+//! round-off).
 
 use nalgebra::{Const, DMatrix, U1, Vector3};
 use num_dual::{Dual2SVec64, DualSVec64};
@@ -19,8 +24,8 @@ use crate::mortar::segment::{PairIntegrals, integrate_pair};
 use crate::mortar::trace::{AdScalar, Facet};
 
 /// By slot `j` and component `c`, the gradient of `v_jc` over the pair's
-/// variables.
-type Gradients = [[Vec<f64>; 3]; 4];
+/// `N` variables: entry `(3 j + c) N + i` (empty for values only).
+pub(crate) type Gradients = Vec<f64>;
 
 /// A pair's `v_j` with derivatives: value, then by slot `j` and
 /// component `c` the gradient (and Hessian) over the pair's dofs.
@@ -29,7 +34,26 @@ pub(crate) struct PairDerivatives {
     /// Global dofs of the variables (filled in by the caller).
     pub(crate) dofs: Vec<usize>,
     pub(crate) gradient: Gradients,
-    pub(crate) hessian: Option<[[DMatrix<f64>; 3]; 4]>,
+    pub(crate) hessian: Option<Box<[[DMatrix<f64>; 3]; 4]>>,
+}
+
+impl PairDerivatives {
+    /// The values alone.
+    pub(crate) fn values(integrals: PairIntegrals<f64>) -> Self {
+        Self {
+            integrals,
+            dofs: Vec::new(),
+            gradient: Vec::new(),
+            hessian: None,
+        }
+    }
+
+    /// The gradient of `v_jc` over the pair's variables (empty for values
+    /// only).
+    pub(crate) fn gradient(&self, j: usize, c: usize) -> &[f64] {
+        let n = self.gradient.len() / 12;
+        &self.gradient[(3 * j + c) * n..(3 * j + c + 1) * n]
+    }
 }
 
 /// A dual number seeded as variable `i` of the pair.
@@ -89,15 +113,15 @@ fn gradient_n<const N: usize>(
     let Some(p) = integrate_pair(&sd, &md, &n, test)? else {
         return Ok(None);
     };
-    let g = std::array::from_fn(|j| {
-        std::array::from_fn(|c| {
-            p.gap_vector[j][c]
+    let g = (0..12)
+        .flat_map(|r| {
+            p.gap_vector[r / 3][r % 3]
                 .eps
                 .unwrap_generic(Const::<N>, U1)
                 .as_slice()
                 .to_vec()
         })
-    });
+        .collect();
     Ok(Some((values(p), g)))
 }
 
@@ -113,15 +137,15 @@ fn hessian_n<const N: usize>(
         return Ok(None);
     };
     let part = |j: usize, c: usize| &p.gap_vector[j][c];
-    let gradient = std::array::from_fn(|j| {
-        std::array::from_fn(|c| {
-            part(j, c)
+    let gradient = (0..12)
+        .flat_map(|r| {
+            part(r / 3, r % 3)
                 .v1
                 .unwrap_generic(U1, Const::<N>)
                 .as_slice()
                 .to_vec()
         })
-    });
+        .collect();
     let hessian = std::array::from_fn(|j| {
         std::array::from_fn(|c| {
             let h = part(j, c).v2.unwrap_generic(Const::<N>, Const::<N>);
@@ -132,7 +156,7 @@ fn hessian_n<const N: usize>(
         integrals: values(p),
         dofs: Vec::new(),
         gradient,
-        hessian: Some(hessian),
+        hessian: Some(Box::new(hessian)),
     }))
 }
 

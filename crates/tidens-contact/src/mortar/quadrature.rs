@@ -25,15 +25,17 @@
 //! - Tri3: `z = p_0 + xi (p_1 - p_0) + eta (p_2 - p_0)`, a 2 x 2 linear
 //!   solve;
 //! - Quad4: Newton on the bilinear map from the inverse of its affine
-//!   part at the centre, `xi <- xi -
-//!   (dz/dxi)^-1 (z(xi) - z)`, in `f64` until the step is below
-//!   [`INVERSE_TOLERANCE`]; then `T::NDERIV` more steps in the scalar
-//!   `T`: from a converged real part each step makes one more order of
-//!   the dual parts exact (the derivatives of the implicit function `xi(z,
-//!   p)`). The first of them keeps the shape functions and the Jacobian
-//!   in `f64` (xi has no dual part yet): `xi = xi_0 - J(xi_0)^-1 (sum_k
-//!   N_k(xi_0) p_k - z)`, the implicit function theorem's first
-//!   derivative at a fifth of the cost of a step all in `T`.
+//!   part at the centre, `xi <- xi - (dz/dxi)^-1 (z(xi) - z)`, in `f64`
+//!   until the step, or the one that would follow it (the residual after
+//!   a step `h` is `d h_1 h_2` exactly), is below [`INVERSE_TOLERANCE`];
+//!   a cell's seven points side by side. Then `T::NDERIV` more steps in
+//!   the scalar `T`: from a converged real part each step makes one more
+//!   order of the dual parts exact (the derivatives of the implicit
+//!   function `xi(z, p)`). The first of them keeps the shape functions
+//!   and the Jacobian in `f64` (xi has no dual part yet): `xi = xi_0 -
+//!   J(xi_0)^-1 (sum_k N_k(xi_0) p_k - z)`, the implicit function
+//!   theorem's first derivative at a fifth of the cost of a step all in
+//!   `T`.
 
 use crate::mortar::MortarError;
 use crate::mortar::trace::{AdScalar, Trace};
@@ -120,6 +122,70 @@ fn residual<T: AdScalar>(trace: Trace, p: &[[T; 2]; 4], z: [T; 2], xi: [T; 2]) -
     [sub(f, z), a, b]
 }
 
+/// Newton on the bilinear planar map of the projected quad nodes `p`,
+/// written `z(xi) = c + xi a + eta b + xi eta d` (see
+/// [`Expansion`](crate::mortar::trace::Expansion)), for each of the points
+/// `z`, side by side (their iterations are independent: the processor
+/// overlaps them). Each starts from the inverse of the map's affine part
+/// at the centre (exact on a parallelogram; two or three steps then
+/// converge). The parameters and the last steps, or the first point that
+/// did not converge with the iterations done and its last step.
+#[allow(clippy::type_complexity)]
+fn bilinear_inverses<const K: usize>(
+    p: &[[f64; 2]; 4],
+    z: &[[f64; 2]; K],
+) -> Result<([[f64; 2]; K], [f64; K]), (usize, usize, f64)> {
+    let e = |w: [f64; 4]| {
+        [0, 1].map(|c| 0.25 * (w[0] * p[0][c] + w[1] * p[1][c] + w[2] * p[2][c] + w[3] * p[3][c]))
+    };
+    let c = e([1.0, 1.0, 1.0, 1.0]);
+    let a = e([-1.0, 1.0, 1.0, -1.0]);
+    let b = e([-1.0, -1.0, 1.0, 1.0]);
+    let d = e([1.0, -1.0, 1.0, -1.0]);
+    let dmax = d[0].abs().max(d[1].abs());
+    let r: [[f64; 2]; K] = std::array::from_fn(|g| sub(c, z[g]));
+    let mut xi: [[f64; 2]; K] =
+        std::array::from_fn(|g| solve2(a, b, r[g]).map_or([0.0, 0.0], |d| [-d[0], -d[1]]));
+    let mut step = [f64::INFINITY; K];
+    let mut done = [false; K];
+    for it in 0..MAX_NEWTON {
+        for g in 0..K {
+            if done[g] {
+                continue;
+            }
+            let [s, t] = xi[g];
+            let f = [0, 1].map(|k| r[g][k] + a[k] * s + b[k] * t + d[k] * (s * t));
+            let (ja, jb) = (
+                [a[0] + d[0] * t, a[1] + d[1] * t],
+                [b[0] + d[0] * s, b[1] + d[1] * s],
+            );
+            let det = ja[0] * jb[1] - ja[1] * jb[0];
+            if !(det.abs() > 0.0) {
+                return Err((g, it, step[g]));
+            }
+            let inv = 1.0 / det;
+            let h = [
+                (f[0] * jb[1] - f[1] * jb[0]) * inv,
+                (ja[0] * f[1] - ja[1] * f[0]) * inv,
+            ];
+            xi[g] = sub(xi[g], h);
+            step[g] = h[0].abs().max(h[1].abs());
+            // The residual after the step is d h_1 h_2 exactly (the map is
+            // bilinear): the step that would follow is about J^-1 d h_1
+            // h_2, bounded with this step's Jacobian.
+            let inverse_norm =
+                (jb[0].abs() + jb[1].abs()).max(ja[0].abs() + ja[1].abs()) * inv.abs();
+            let next = inverse_norm * dmax * (h[0] * h[1]).abs();
+            done[g] = step[g] < INVERSE_TOLERANCE || next < 0.1 * INVERSE_TOLERANCE;
+        }
+        if done.iter().all(|&d| d) {
+            return Ok((xi, step));
+        }
+    }
+    let g = done.iter().position(|&d| !d).unwrap_or(0);
+    Err((g, MAX_NEWTON, step[g]))
+}
+
 /// The parametric coordinates `xi` of the point `z` of the auxiliary
 /// plane on the planar map of a facet of `trace` whose projected nodes are
 /// `p` (see the module docs).
@@ -128,68 +194,85 @@ pub fn inverse_map<T: AdScalar>(
     p: &[[T; 2]; 4],
     z: [T; 2],
 ) -> Result<[T; 2], MortarError> {
-    let fail = |iterations, step| MortarError::InverseMap {
+    inverse_maps(trace, p, &[z]).map(|[xi]| xi)
+}
+
+/// [`inverse_map`] of each of the points `z` (a quad's Newton iterations
+/// side by side).
+pub fn inverse_maps<T: AdScalar, const K: usize>(
+    trace: Trace,
+    p: &[[T; 2]; 4],
+    z: &[[T; 2]; K],
+) -> Result<[[T; 2]; K], MortarError> {
+    let fail = |g: usize, iterations, step| MortarError::InverseMap {
         trace,
-        z: z.map(|v| v.re()),
+        z: [z[g][0].re(), z[g][1].re()],
         iterations,
         step,
     };
     match trace {
         Trace::Tri3 => {
-            solve2(sub(p[1], p[0]), sub(p[2], p[0]), sub(z, p[0])).ok_or_else(|| fail(0, f64::NAN))
-        }
-        Trace::Quad4 => {
-            let pr = p.map(|q| q.map(|v| v.re()));
-            let zr = z.map(|v| v.re());
-            // Start from the inverse of the map's affine part (exact on a
-            // parallelogram): two or three steps then converge.
-            let centre = [0.0, 0.0];
-            let [f, a, b] = residual(trace, &pr, zr, centre);
-            let mut xi = solve2(a, b, f).map_or(centre, |d| sub(centre, d));
-            let mut converged = false;
-            let mut step = f64::INFINITY;
-            for it in 0..MAX_NEWTON {
-                let [f, a, b] = residual(trace, &pr, zr, xi);
-                let d = solve2(a, b, f).ok_or_else(|| fail(it, step))?;
-                xi = sub(xi, d);
-                step = d[0].abs().max(d[1].abs());
-                if step < INVERSE_TOLERANCE {
-                    converged = true;
-                    break;
-                }
-            }
-            if !converged {
-                return Err(fail(MAX_NEWTON, step));
-            }
-            if T::NDERIV == 0 {
-                return Ok(xi.map(T::from));
-            }
-            // The first step in the scalar T from the converged real part,
-            // with the shape functions and the Jacobian there in f64 (the
-            // dual parts of xi are zero): it makes the first derivatives
-            // exact, at a fifth of the cost of a step all in T.
-            let n = trace.shape(xi);
-            let [_, a, b] = residual(trace, &pr, zr, xi);
-            let mut f = [-z[0], -z[1]];
-            for k in 0..4 {
-                for c in 0..2 {
-                    f[c] += p[k][c] * n[k];
-                }
-            }
-            let det = a[0] * b[1] - a[1] * b[0];
-            let mut xi = [
-                T::from(xi[0]) - (f[0] * b[1] - f[1] * b[0]) / det,
-                T::from(xi[1]) - (f[1] * a[0] - f[0] * a[1]) / det,
-            ];
-            // Each further step in T makes one more order exact.
-            for _ in 1..T::NDERIV {
-                let [f, a, b] = residual(trace, p, z, xi);
-                let d = solve2(a, b, f).ok_or_else(|| fail(MAX_NEWTON, step))?;
-                xi = sub(xi, d);
+            let (u, v) = (sub(p[1], p[0]), sub(p[2], p[0]));
+            let mut xi = [[T::from(0.0); 2]; K];
+            for g in 0..K {
+                xi[g] = solve2(u, v, sub(z[g], p[0])).ok_or_else(|| fail(g, 0, f64::NAN))?;
             }
             Ok(xi)
         }
+        Trace::Quad4 => {
+            let pr: [[f64; 2]; 4] = [0, 1, 2, 3].map(|k| [p[k][0].re(), p[k][1].re()]);
+            let zr: [[f64; 2]; K] = std::array::from_fn(|g| [z[g][0].re(), z[g][1].re()]);
+            let (xr, steps) =
+                bilinear_inverses(&pr, &zr).map_err(|(g, it, step)| fail(g, it, step))?;
+            let mut out = [[T::from(0.0); 2]; K];
+            for g in 0..K {
+                out[g] = refine(&pr, p, zr[g], z[g], xr[g])
+                    .ok_or_else(|| fail(g, MAX_NEWTON, steps[g]))?;
+            }
+            Ok(out)
+        }
     }
+}
+
+/// A quad's inverse map in the scalar `T` from its converged real part
+/// `xi` (projected nodes `p`, real parts `pr`; the point `z`, real part
+/// `zr`): `T::NDERIV` Newton steps in `T`, each making one more order of
+/// the dual parts exact (the derivatives of the implicit function `xi(z,
+/// p)`). None if a step's Jacobian is singular.
+fn refine<T: AdScalar>(
+    pr: &[[f64; 2]; 4],
+    p: &[[T; 2]; 4],
+    zr: [f64; 2],
+    z: [T; 2],
+    xi: [f64; 2],
+) -> Option<[T; 2]> {
+    let trace = Trace::Quad4;
+    if T::NDERIV == 0 {
+        return Some(xi.map(T::from));
+    }
+    // The first step in the scalar T from the converged real part,
+    // with the shape functions and the Jacobian there in f64 (the
+    // dual parts of xi are zero): it makes the first derivatives
+    // exact, at a fifth of the cost of a step all in T.
+    let n = trace.shape(xi);
+    let [_, a, b] = residual(trace, pr, zr, xi);
+    let mut f = [-z[0], -z[1]];
+    for k in 0..4 {
+        for c in 0..2 {
+            f[c] += p[k][c] * n[k];
+        }
+    }
+    let det = a[0] * b[1] - a[1] * b[0];
+    let mut xi = [
+        T::from(xi[0]) - (f[0] * b[1] - f[1] * b[0]) / det,
+        T::from(xi[1]) - (f[1] * a[0] - f[0] * a[1]) / det,
+    ];
+    // Each further step in T makes one more order exact.
+    for _ in 1..T::NDERIV {
+        let [f, a, b] = residual(trace, p, z, xi);
+        xi = sub(xi, solve2(a, b, f)?);
+    }
+    Some(xi)
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 //! On each cell `T` of the overlap ([`clip`]) the 7-point rule gives
 //! points `z_g` of the auxiliary plane with weights `w_g |T|`. The slave
 //! and master parameters of `z_g` are found by the inverse maps
-//! ([`inverse_map`]): `P(x_s(xi_g)) = z_g = P(x_m(eta_g))`. `P` projects
+//! ([`inverse_map`](crate::mortar::quadrature::inverse_map)): `P(x_s(xi_g)) = z_g = P(x_m(eta_g))`. `P` projects
 //! along `n0`, so `x_m(eta_g) - x_s(xi_g)` is parallel to `n0`: the two
 //! points face each other across the gap.
 //!
@@ -44,7 +44,7 @@ use nalgebra::Vector3;
 use crate::mortar::MortarError;
 use crate::mortar::clip::{Point, clip};
 use crate::mortar::dual::TestFunctions;
-use crate::mortar::quadrature::{TRIANGLE_7, inverse_map};
+use crate::mortar::quadrature::{TRIANGLE_7, inverse_maps};
 use crate::mortar::trace::{AdScalar, Expansion, Facet, Trace};
 
 /// The integrals of one pair (module docs), by the slave facet's nodes
@@ -101,10 +101,11 @@ pub fn integrate_pair<T: AdScalar>(
             let cell_area = (cell[1][0] - cell[0][0]) * (cell[2][1] - cell[0][1])
                 - (cell[1][1] - cell[0][1]) * (cell[2][0] - cell[0][0]);
             let cell_area = cell_area * 0.5;
-            for (l, w) in &TRIANGLE_7 {
-                let z = cell_point(&cell, l);
-                let xi = inverse_map(slave.trace, &overlap.slave, z)?;
-                let eta = inverse_map(master.trace, &overlap.master, z)?;
+            let z: [Point<T>; 7] = TRIANGLE_7.map(|(l, _)| cell_point(&cell, &l));
+            let xis = inverse_maps(slave.trace, &overlap.slave, &z)?;
+            let etas = inverse_maps(master.trace, &overlap.master, &z)?;
+            for (g, (_, w)) in TRIANGLE_7.iter().enumerate() {
+                let (xi, eta) = (xis[g], etas[g]);
                 let da = cell_area * flat.unwrap_or_else(|| jacobians(xi)) * *w;
                 let weighted = (xm.position(eta) - xs.position(xi)) * da;
                 let n = slave.trace.shape(xi);

@@ -19,11 +19,11 @@
 //! d2g_j = sum_c (n_jc d2V_jc + V_jc d2n_jc + dn_jc (x) dV_jc + dV_jc (x) dn_jc)
 //! ```
 //!
-//! `dV_j` and `d2V_j`, pair by pair, by forward-mode automatic
-//! differentiation over the pair's node coordinates (`DualSVec64<N>`, or
-//! `Dual2SVec64<N>` for the Hessian, `N = 3 (n_s + n_m)`: 18 to 24) with
-//! the normals held constant; `dn_j` and `d2n_j` by
-//! [`normal_derivatives`]. The Hessian is for exact tangents in tests:
+//! `dV_j`, pair by pair over the pair's node coordinates (`N = 3 (n_s +
+//! n_m)`: 18 to 24) with the normals held constant, by the chain rule in
+//! `f64` (`pair_gradient`); `d2V_j` by forward-mode automatic
+//! differentiation (`Dual2SVec64<N>`, `pair_derivatives`); `dn_j` and
+//! `d2n_j` by [`normal_derivatives`]. The Hessian is for exact tangents in tests:
 //! every dual number then carries an `N x N` matrix, and the pairs are
 //! integrated one after another on a thread with a large stack; values
 //! and gradients pair by pair in parallel (rayon), summed in the pairs'
@@ -39,6 +39,7 @@ use crate::mortar::clip::clip;
 use crate::mortar::dual::SurfaceTestFunctions;
 use crate::mortar::normals::{NodeRing, nodal_normal, normal_derivatives};
 use crate::mortar::pair_derivatives::{PairDerivatives, pair_derivatives};
+use crate::mortar::pair_gradient::pair_gradient;
 use crate::mortar::quadrature::element_rule;
 use crate::mortar::segment::integrate_pair;
 use crate::mortar::trace::{Facet, Trace};
@@ -136,16 +137,14 @@ fn pair_contribution(
     let n: [Vector3<f64>; 4] = snodes.map(|k| normals[&k]);
     let t = &test.facets[sf];
     let result = match derivatives {
-        Derivatives::Value | Derivatives::Mortar => integrate_pair(&s, &m, &n, t)?.map(|integrals| PairDerivatives {
-            integrals,
-            dofs: Vec::new(),
-            gradient: Default::default(),
-            hessian: None,
-        }),
+        Derivatives::Value | Derivatives::Mortar => {
+            integrate_pair(&s, &m, &n, t)?.map(PairDerivatives::values)
+        }
         // Most candidates do not overlap: find out in f64 before any dual
         // number is made.
         _ if clip(&s, &m).is_none() => None,
-        _ => pair_derivatives(&s, &m, &n, t, derivatives == Derivatives::Hessian)?,
+        Derivatives::Gradient => pair_gradient(&s, &m, &n, t)?,
+        Derivatives::Hessian => pair_derivatives(&s, &m, &n, t, true)?,
     };
     Ok(result.map(|mut p| {
         let (ns, nm) = (s.node_count(), m.node_count());
@@ -165,14 +164,18 @@ fn pair_contribution(
 }
 
 /// Adds what pair `p` of slave facet nodes `snodes` and master facet nodes
-/// `mnodes` brings to the sums of its slave nodes.
+/// `mnodes` brings to the sums of its slave nodes (of those in `only`, if
+/// given).
 fn accumulate(
     sums: &mut BTreeMap<usize, Sum>,
     p: &PairDerivatives,
-    snodes: &[usize],
-    mnodes: &[usize],
+    (snodes, mnodes): (&[usize], &[usize]),
+    only: Option<&BTreeSet<usize>>,
 ) {
     for (j, &node) in snodes.iter().enumerate() {
+        if only.is_some_and(|nodes| !nodes.contains(&node)) {
+            continue;
+        }
         let sum = sums.entry(node).or_default();
         sum.v += p.integrals.gap_vector[j];
         for (k, &n) in snodes.iter().enumerate() {
@@ -181,13 +184,14 @@ fn accumulate(
         for (l, &n) in mnodes.iter().enumerate() {
             *sum.m.entry(n).or_default() += p.integrals.m[j][l];
         }
-        if p.dofs.is_empty() || p.gradient[j][0].is_empty() {
+        if p.dofs.is_empty() || p.gradient.is_empty() {
             continue;
         }
+        let g = [0, 1, 2].map(|c| p.gradient(j, c));
         for (i, &dof) in p.dofs.iter().enumerate() {
             let e = sum.dv.entry(dof).or_default();
             for c in 0..3 {
-                e[c] += p.gradient[j][c][i];
+                e[c] += g[c][i];
             }
         }
         if let Some(h) = &p.hessian {
@@ -217,6 +221,35 @@ pub fn weighted_gaps(
     pairs: &[(usize, usize)],
     test: &SurfaceTestFunctions,
     derivatives: Derivatives,
+) -> Result<Vec<WeightedGap>, MortarError> {
+    gaps_of(slave, master, x, pairs, test, derivatives, None)
+}
+
+/// The weighted gaps of the slave nodes `nodes` (global ids) only, those
+/// of them that overlap `master`: the same as [`weighted_gaps`] gives
+/// them, without the other nodes' sums and derivatives (a pair's facet
+/// brings three or four nodes, of which a caller may need one).
+pub fn weighted_gaps_of(
+    slave: &ContactSurface,
+    master: &ContactSurface,
+    x: &[[f64; 3]],
+    pairs: &[(usize, usize)],
+    test: &SurfaceTestFunctions,
+    derivatives: Derivatives,
+    nodes: &BTreeSet<usize>,
+) -> Result<Vec<WeightedGap>, MortarError> {
+    gaps_of(slave, master, x, pairs, test, derivatives, Some(nodes))
+}
+
+/// [`weighted_gaps`] of the nodes `only`, or of all.
+fn gaps_of(
+    slave: &ContactSurface,
+    master: &ContactSurface,
+    x: &[[f64; 3]],
+    pairs: &[(usize, usize)],
+    test: &SurfaceTestFunctions,
+    derivatives: Derivatives,
+    only: Option<&BTreeSet<usize>>,
 ) -> Result<Vec<WeightedGap>, MortarError> {
     for &(s, m) in pairs {
         if s >= slave.facets.len() || m >= master.facets.len() || s >= test.facets.len() {
@@ -250,17 +283,15 @@ pub fn weighted_gaps(
     let contribution = |&pair: &(usize, usize)| {
         pair_contribution(slave, master, x, pair, &normals, test, derivatives)
     };
-    let contributions: Vec<Option<PairDerivatives>> = if derivatives == Derivatives::Hessian {
+    // Collected by index (no reallocation), the errors read in the pairs'
+    // order.
+    type Contribution = Result<Option<PairDerivatives>, MortarError>;
+    let contributions: Vec<Contribution> = if derivatives == Derivatives::Hessian {
         // A second-order dual number carries an N x N matrix (4.6 kB at N =
         // 24): one pair's integration needs more than a thread's default
         // stack (2 MiB). The pairs go one after another on a thread with a
         // large one (or, if it cannot be made, on this one).
-        let run = || {
-            pairs
-                .iter()
-                .map(contribution)
-                .collect::<Result<Vec<_>, _>>()
-        };
+        let run = || pairs.iter().map(contribution).collect::<Vec<_>>();
         std::thread::scope(|scope| {
             match std::thread::Builder::new()
                 .stack_size(HESSIAN_STACK)
@@ -271,12 +302,9 @@ pub fn weighted_gaps(
                     .unwrap_or_else(|panic| std::panic::resume_unwind(panic)),
                 Err(_) => run(),
             }
-        })?
+        })
     } else {
-        pairs
-            .par_iter()
-            .map(contribution)
-            .collect::<Result<_, _>>()?
+        pairs.par_iter().map(contribution).collect()
     };
     let mut sums: BTreeMap<usize, Sum> = BTreeMap::new();
     let (ns, nm) = (
@@ -284,36 +312,55 @@ pub fn weighted_gaps(
         Trace::of_kind(master.kind).node_count(),
     );
     for (&(sf, mf), p) in pairs.iter().zip(&contributions) {
-        if let Some(p) = p {
-            accumulate(
-                &mut sums,
-                p,
-                &slave.facets[sf][..ns],
-                &master.facets[mf][..nm],
-            );
+        if let Some(p) = p.as_ref().map_err(Clone::clone)? {
+            let nodes = (&slave.facets[sf][..ns], &master.facets[mf][..nm]);
+            accumulate(&mut sums, p, nodes, only);
         }
     }
     let sums: Vec<(usize, Sum)> = sums.into_iter().collect();
+    // Each facet's integrals of its test functions, once for all its nodes.
+    let facets: Vec<usize> = sums
+        .iter()
+        .flat_map(|&(node, _)| ring.facets(index(node)).iter().map(|&(f, _)| f))
+        .collect::<BTreeSet<usize>>()
+        .into_iter()
+        .collect();
+    let integrals: Vec<[f64; 4]> = facets
+        .par_iter()
+        .map(|&f| test_integrals(slave, test, x, f, strace))
+        .collect();
+    let support = |i: usize| -> f64 {
+        ring.facets(i)
+            .iter()
+            .map(|&(f, c)| integrals[facets.binary_search(&f).unwrap_or(0)][c])
+            .sum()
+    };
     Ok(sums
         .into_par_iter()
         .map(|(node, sum)| {
             let i = index(node);
-            let area = support_integral(slave, &ring, test, x, i, strace);
-            finish(slave, &ring, x, node, i, area, sum, derivatives)
+            let normal = normals.get(&node).copied();
+            finish(
+                slave,
+                &ring,
+                x,
+                (node, i, normal),
+                support(i),
+                sum,
+                derivatives,
+            )
         })
         .collect())
 }
 
-/// The weighted gap of `node` (of index `i` in `slave.nodes`, support
-/// integral `area`) from its pairs' sums: `g_j = n_j . V_j` and the chain
-/// rule of the module docs.
-#[allow(clippy::too_many_arguments)]
+/// The weighted gap of `node` (of index `i` in `slave.nodes`, nodal
+/// normal `normal` if known, support integral `area`) from its pairs'
+/// sums: `g_j = n_j . V_j` and the chain rule of the module docs.
 fn finish(
     slave: &ContactSurface,
     ring: &NodeRing,
     x: &[[f64; 3]],
-    node: usize,
-    i: usize,
+    (node, i, normal): (usize, usize, Option<Vector3<f64>>),
     area: f64,
     sum: Sum,
     derivatives: Derivatives,
@@ -329,7 +376,7 @@ fn finish(
         hessian: None,
     };
     if derivatives == Derivatives::Value {
-        let n = nodal_normal(slave, ring, i, x);
+        let n = normal.unwrap_or_else(|| nodal_normal(slave, ring, i, x));
         gap.gap = n.dot(&sum.v);
         gap.normal = n.into();
         return gap;
@@ -396,24 +443,20 @@ fn finish(
     gap
 }
 
-/// `A_j = sum_{e at j} int_e Phi_j dA` of the node of index `i`, by each
-/// facet's rule in the coordinates `x`.
-fn support_integral(
+/// `int_e Phi_j dA` of facet `f`'s test functions by its rule in the
+/// coordinates `x` (`A_j` sums them over the facets at `j`).
+fn test_integrals(
     slave: &ContactSurface,
-    ring: &NodeRing,
     test: &SurfaceTestFunctions,
     x: &[[f64; 3]],
-    i: usize,
+    f: usize,
     trace: Trace,
-) -> f64 {
+) -> [f64; 4] {
+    let facet = Facet::of_surface(slave, f, x);
     let rule = element_rule(trace);
-    ring.facets(i)
-        .iter()
-        .map(|&(f, c)| {
-            let facet = Facet::of_surface(slave, f, x);
-            rule.iter()
-                .map(|&(xi, w)| w * test.facets[f].eval(&trace.shape(xi))[c] * facet.jacobian(xi))
-                .sum::<f64>()
-        })
-        .sum()
+    std::array::from_fn(|c| {
+        rule.iter()
+            .map(|&(xi, w)| w * test.facets[f].eval(&trace.shape(xi))[c] * facet.jacobian(xi))
+            .sum::<f64>()
+    })
 }
