@@ -20,9 +20,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 use tidens_solver::{
-    Checkpoint, ContactFormulation, ContactMode, ContactOptions, CurvePoint, ElementKind, HexFacets, LoadHistory,
-    MAX_MESH_LEVEL, MAX_NEWTON_ITERATIONS, MeshOptions, NewtonSettings, RunStats, Scene, Settings,
-    Simulation, SolverError, Status,
+    Checkpoint, ContactFormulation, ContactMode, ContactOptions, CurvePoint, ElementKind,
+    HexFacets, LoadHistory, MAX_MESH_LEVEL, MAX_NEWTON_ITERATIONS, MeshOptions, NewtonSettings,
+    RunStats, Scene, Settings, Simulation, SolverError, Status,
 };
 
 /// The Python names of the contact modes, in the order of `CONTACT_MODES`.
@@ -51,8 +51,14 @@ pub(crate) fn named<T: Copy>(parameter: &str, name: &str, table: &[(&str, T)]) -
 /// default first: node to facet on each hexahedral face's two triangles or
 /// on its bilinear patch, or mortar (weighted gaps, segment to segment).
 pub(crate) const CONTACT_FACETS: [(&str, (HexFacets, ContactFormulation)); 3] = [
-    ("triangles", (HexFacets::Triangles, ContactFormulation::NodeToFacet)),
-    ("bilinear", (HexFacets::Bilinear, ContactFormulation::NodeToFacet)),
+    (
+        "triangles",
+        (HexFacets::Triangles, ContactFormulation::NodeToFacet),
+    ),
+    (
+        "bilinear",
+        (HexFacets::Bilinear, ContactFormulation::NodeToFacet),
+    ),
     ("mortar", (HexFacets::Triangles, ContactFormulation::Mortar)),
 ];
 
@@ -589,7 +595,11 @@ impl PySimulation {
     /// checkpoint. Each must be finite.
     fn set_density_targets(&self, py: Python<'_>, targets: Vec<f64>) -> PyResult<()> {
         if let Some((k, r)) = targets.iter().enumerate().find(|(_, r)| !r.is_finite()) {
-            return Err(parameter_error(&format!("targets[{k}]"), Number(*r), "finite"));
+            return Err(parameter_error(
+                &format!("targets[{k}]"),
+                Number(*r),
+                "finite",
+            ));
         }
         py.detach(|| {
             let mut sim = self.sim.lock().map_err(|_| poisoned())?;

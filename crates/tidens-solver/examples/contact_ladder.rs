@@ -23,19 +23,35 @@ fn main() {
         _ => ContactFormulation::Mortar,
     };
     let level: u32 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(2);
-    let tolerance: f64 = args.get(4).and_then(|s| s.parse().ok()).unwrap_or(0.02 * 2f64.powi(3 - level as i32));
+    let tolerance: f64 = args
+        .get(4)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0.02 * 2f64.powi(3 - level as i32));
     let until: f64 = args.get(5).and_then(|s| s.parse().ok()).unwrap_or(0.95);
     let verbose = std::env::var("LADDER_VERBOSE").is_ok();
-    let options = MeshOptions { level, ..MeshOptions::default() };
+    let options = MeshOptions {
+        level,
+        ..MeshOptions::default()
+    };
     let scene = Scene::from_cell(&cell, &options).unwrap();
-    let mut settings = Settings::new(LoadHistory { stress: 15.0, knockdown: 1.0, ramp_time: 1.0 });
+    let mut settings = Settings::new(LoadHistory {
+        stress: 15.0,
+        knockdown: 1.0,
+        ramp_time: 1.0,
+    });
     settings.until_density = Some(until);
     settings.tolerance = tolerance;
     settings.contact.formulation = formulation;
-    if let Some(r) = std::env::var("LADDER_RTOL").ok().and_then(|s| s.parse().ok()) {
+    if let Some(r) = std::env::var("LADDER_RTOL")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
         settings.newton.residual_tolerance = r;
     }
-    if let Some(f) = std::env::var("LADDER_PENALTY_FACTOR").ok().and_then(|s| s.parse().ok()) {
+    if let Some(f) = std::env::var("LADDER_PENALTY_FACTOR")
+        .ok()
+        .and_then(|s| s.parse().ok())
+    {
         settings.contact.penalty_factor = f;
     }
     let t0 = Instant::now();
@@ -64,46 +80,105 @@ fn main() {
         let first = *s1.nodes.iter().min().unwrap();
         let n = x.len() / 3;
         for (i, sf) in m.surfaces().iter().enumerate() {
-            let c: [f64; 3] = std::array::from_fn(|c| sf.nodes.iter().map(|&k| x[3 * k + c]).sum::<f64>() / sf.nodes.len() as f64);
+            let c: [f64; 3] = std::array::from_fn(|c| {
+                sf.nodes.iter().map(|&k| x[3 * k + c]).sum::<f64>() / sf.nodes.len() as f64
+            });
             let f = sf.facets[0];
-            let p: Vec<[f64; 3]> = f.iter().map(|&k| [x[3 * k], x[3 * k + 1], x[3 * k + 2]]).collect();
+            let p: Vec<[f64; 3]> = f
+                .iter()
+                .map(|&k| [x[3 * k], x[3 * k + 1], x[3 * k + 2]])
+                .collect();
             let a: [f64; 3] = std::array::from_fn(|c| p[2][c] - p[0][c]);
             let b: [f64; 3] = std::array::from_fn(|c| p[3][c] - p[1][c]);
-            let nrm = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+            let nrm = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
             println!("surface {i} facet 0 at {:?} normal {:?}", p[0], nrm);
-            println!("surface {i}: nodes {}..{} centroid {:?}", sf.nodes.iter().min().unwrap(), sf.nodes.iter().max().unwrap(), c);
+            println!(
+                "surface {i}: nodes {}..{} centroid {:?}",
+                sf.nodes.iter().min().unwrap(),
+                sf.nodes.iter().max().unwrap(),
+                c
+            );
         }
-        for k in first..n { for c in 0..3 { x[3 * k + c] -= shift / 3f64.sqrt(); } }
+        for k in first..n {
+            for c in 0..3 {
+                x[3 * k + c] -= shift / 3f64.sqrt();
+            }
+        }
         let ev = m.evaluate(&x, true);
         let pressed: Vec<_> = ev.terms.iter().filter(|t| t.pressure > 0.0).collect();
         println!("{} terms, {} pressed", ev.terms.len(), pressed.len());
         let mut pens: Vec<f64> = ev.terms.iter().map(|t| t.penetration).collect();
         pens.sort_by(f64::total_cmp);
         println!("penetrations {:?}", pens);
-        let mut gaps = m.mean_gaps(&x); gaps.sort_by(|a, b| a.3.total_cmp(&b.3));
-        println!("mean gaps {:?}", gaps.iter().take(6).map(|g| g.3).collect::<Vec<_>>());
+        let mut gaps = m.mean_gaps(&x);
+        gaps.sort_by(|a, b| a.3.total_cmp(&b.3));
+        println!(
+            "mean gaps {:?}",
+            gaps.iter().take(6).map(|g| g.3).collect::<Vec<_>>()
+        );
         for g in gaps.iter().take(8) {
             let node = m.surfaces()[g.0].nodes[g.1];
-            println!("  slave {} node {} at {:?} gap {:e}", g.0, node, &x[3 * node..3 * node + 3], g.3);
+            println!(
+                "  slave {} node {} at {:?} gap {:e}",
+                g.0,
+                node,
+                &x[3 * node..3 * node + 3],
+                g.3
+            );
         }
         // Global force and tangent as maps.
-        let force = |x: &[f64]| { let e = m.evaluate(x, false); let mut f = std::collections::BTreeMap::new(); for t in &e.terms { for (d, v) in t.dofs.iter().zip(&t.force) { *f.entry(*d).or_insert(0.0) += v; } } f };
+        let force = |x: &[f64]| {
+            let e = m.evaluate(x, false);
+            let mut f = std::collections::BTreeMap::new();
+            for t in &e.terms {
+                for (d, v) in t.dofs.iter().zip(&t.force) {
+                    *f.entry(*d).or_insert(0.0) += v;
+                }
+            }
+            f
+        };
         let mut k = std::collections::BTreeMap::new();
-        for t in &ev.terms { let nd = t.dofs.len(); for a in 0..nd { for b in 0..nd { *k.entry((t.dofs[a], t.dofs[b])).or_insert(0.0) += t.tangent[a * nd + b]; } } }
+        for t in &ev.terms {
+            let nd = t.dofs.len();
+            for a in 0..nd {
+                for b in 0..nd {
+                    *k.entry((t.dofs[a], t.dofs[b])).or_insert(0.0) += t.tangent[a * nd + b];
+                }
+            }
+        }
         let f0 = force(&x);
-        let sum: [f64; 3] = std::array::from_fn(|c| f0.iter().filter(|(d, _)| *d % 3 == c).map(|(_, v)| v).sum());
-        println!("force sum {:?}, max |f| {:e}", sum, f0.values().fold(0.0f64, |a, b| a.max(b.abs())));
+        let sum: [f64; 3] =
+            std::array::from_fn(|c| f0.iter().filter(|(d, _)| *d % 3 == c).map(|(_, v)| v).sum());
+        println!(
+            "force sum {:?}, max |f| {:e}",
+            sum,
+            f0.values().fold(0.0f64, |a, b| a.max(b.abs()))
+        );
         let dofs: Vec<usize> = f0.keys().copied().collect();
-        let h: f64 = std::env::var("LADDER_FD_H").ok().and_then(|s| s.parse().ok()).unwrap_or(1e-9);
-        let mut worst = 0.0f64; let mut scale = 0.0f64;
+        let h: f64 = std::env::var("LADDER_FD_H")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(1e-9);
+        let mut worst = 0.0f64;
+        let mut scale = 0.0f64;
         for &d in dofs.iter().step_by(7) {
-            let mut xp = x.clone(); xp[d] += h; let mut xm = x.clone(); xm[d] -= h;
+            let mut xp = x.clone();
+            xp[d] += h;
+            let mut xm = x.clone();
+            xm[d] -= h;
             let (fp, fm) = (force(&xp), force(&xm));
             for &e in &dofs {
                 let fd = (fp.get(&e).unwrap_or(&0.0) - fm.get(&e).unwrap_or(&0.0)) / (2.0 * h);
                 let kk = *k.get(&(e, d)).unwrap_or(&0.0);
-                if (fd - kk).abs() > worst { println!("  worse: row {e} col {d}: fd {fd:e} tangent {kk:e}"); }
-                worst = worst.max((fd - kk).abs()); scale = scale.max(fd.abs());
+                if (fd - kk).abs() > worst {
+                    println!("  worse: row {e} col {d}: fd {fd:e} tangent {kk:e}");
+                }
+                worst = worst.max((fd - kk).abs());
+                scale = scale.max(fd.abs());
             }
         }
         println!("tangent vs FD: worst {worst:e} of {scale:e}");
@@ -117,7 +192,15 @@ fn main() {
             Ok(p) => {
                 let p = p.clone();
                 if verbose {
-                    println!("step {} t {:.4e} rho {:.5} it {} pen {:.2e} depth {:.2e}", p.step, p.time, p.rel_density, p.newton_iterations, p.max_penetration, p.max_depth);
+                    println!(
+                        "step {} t {:.4e} rho {:.5} it {} pen {:.2e} depth {:.2e}",
+                        p.step,
+                        p.time,
+                        p.rel_density,
+                        p.newton_iterations,
+                        p.max_penetration,
+                        p.max_depth
+                    );
                 }
                 while !marks.is_empty() && p.rel_density >= marks[0] {
                     let r = marks.remove(0);
@@ -153,6 +236,9 @@ fn main() {
         s.evaluation_seconds,
         s.contact_seconds,
         times,
-        sim.curve().iter().map(|p| p.max_penetration).fold(0.0, f64::max),
+        sim.curve()
+            .iter()
+            .map(|p| p.max_penetration)
+            .fold(0.0, f64::max),
     );
 }

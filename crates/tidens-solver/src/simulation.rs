@@ -187,14 +187,14 @@ fn particle_contact(
     let stress = settings.load.knockdown * settings.load.stress;
     let all: Vec<ContactSurface> = surfaces.into_iter().chain(images).collect();
     let settings = ContactSettings {
-            mode: c.mode,
-            penalty: (c.penalty_factor * material.young / h).min(PENALTY_CAP * stress / h),
-            search_distance: h,
-            curvature_stiffness: settings.newton.consistent_tangent,
-            // The applied stress moves a node by a fiftieth of an element
-            // per Newton step against it; below the default touch stiffness
-            // (1e-3 of the penalty) for E/sigma > 5e3 (the base case: 4e3).
-            touch_stiffness_cap: TOUCH_STIFFNESS_CAP * stress / h,
+        mode: c.mode,
+        penalty: (c.penalty_factor * material.young / h).min(PENALTY_CAP * stress / h),
+        search_distance: h,
+        curvature_stiffness: settings.newton.consistent_tangent,
+        // The applied stress moves a node by a fiftieth of an element
+        // per Newton step against it; below the default touch stiffness
+        // (1e-3 of the penalty) for E/sigma > 5e3 (the base case: 4e3).
+        touch_stiffness_cap: TOUCH_STIFFNESS_CAP * stress / h,
     };
     let contact = if mortar {
         ParticleContact::mortar(all, settings, tidens_contact::mortar::TestBasis::Standard)
@@ -913,7 +913,13 @@ mod tests {
             sim.checkpoint()
         });
         let material = Preset::Ti64Creep1293K.material();
-        Simulation::resume(&bcc_level1_scene(), material, bcc_level1_settings(adjust), saved).unwrap()
+        Simulation::resume(
+            &bcc_level1_scene(),
+            material,
+            bcc_level1_settings(adjust),
+            saved,
+        )
+        .unwrap()
     }
 
     /// A failed attempt changes the contact state (planes caught or

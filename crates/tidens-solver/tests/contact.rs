@@ -2,8 +2,8 @@
 
 use tidens_fem::ElementKind;
 use tidens_solver::{
-    Cell, ContactFormulation, ContactMode, LoadHistory, MeshOptions, Octant, Preset, Scene, Settings, Simulation,
-    Status,
+    Cell, ContactFormulation, ContactMode, LoadHistory, MeshOptions, Octant, Preset, Scene,
+    Settings, Simulation, Status,
 };
 
 fn press(cell: &Cell, level: u32, until_density: f64, mode: ContactMode) -> (Scene, Simulation) {
@@ -177,7 +177,10 @@ fn pair_deforms_mirror_symmetrically(element: ElementKind, until: f64, mark: f64
         a.time + (rho - a.rel_density) / (b.rel_density - a.rel_density) * (b.time - a.time)
     };
     let (tp, ts) = (t_at(&pair, mark), t_at(&sc, mark));
-    eprintln!("t({mark}): pair {tp:.4} s, sc {ts:.4} s; contact surface off the mid-plane by {:.2e} R", flat / r);
+    eprintln!(
+        "t({mark}): pair {tp:.4} s, sc {ts:.4} s; contact surface off the mid-plane by {:.2e} R",
+        flat / r
+    );
     assert!(
         (tp / ts - 1.0).abs() < 0.05,
         "t({mark}): pair {tp:.3} s, sc {ts:.3} s"

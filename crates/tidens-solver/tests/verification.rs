@@ -317,7 +317,8 @@ fn results_are_identical_across_thread_counts() {
             .build()
             .unwrap();
         pool.install(|| {
-            let mut sim = sc_simulation(Preset::Ti64Creep1293K.material(), 10.0, 1.0, 2, 0.56, 0.05);
+            let mut sim =
+                sc_simulation(Preset::Ti64Creep1293K.material(), 10.0, 1.0, 2, 0.56, 0.05);
             sim.run(|_| true).unwrap();
             sim.curve().to_vec()
         })

@@ -207,11 +207,11 @@ fn gradient_n<const N: usize>(
     }
     let mut v = [Vector3::zeros(); 4];
     let mut gradient: Gradients = vec![0.0; 12 * N];
+    // One row of N entries per (node, component).
+    let (rows, _) = gradient.as_chunks_mut::<N>();
     for j in 0..4 {
         for c in 0..3 {
-            let g: &mut Grad<N> = (&mut gradient[(3 * j + c) * N..(3 * j + c + 1) * N])
-                .try_into()
-                .expect("N entries");
+            let g: &mut Grad<N> = &mut rows[3 * j + c];
             for k in 0..ns {
                 let a = test.coefficients[j][k];
                 v[j][c] += u[k][c] * a;
