@@ -61,7 +61,7 @@ pub use penetration::{
     Penetration, PenetrationHessian, penetration, penetration_gradient, penetration_hessian,
     triangle_penetration_gradient, triangle_penetration_hessian,
 };
-pub use surface::{ContactSurface, FacetKind};
+pub use surface::{ContactSurface, Continuation, FacetKind};
 
 use fold::FoldWeight;
 use parry3d_f64::math::Vector as PVector;

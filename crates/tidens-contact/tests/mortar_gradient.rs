@@ -7,6 +7,7 @@
 //!
 //! - gradient: `(g_j(x + h d) - g_j(x - h d)) / 2h` against `grad g_j . d`
 //!   for random directions `d` moving every node, rel. 1e-7;
+//! - with the master's facets continued past its open edges, the same;
 //! - Hessian: `(grad g_j(x + h d) - grad g_j(x - h d)) / 2h` against
 //!   `H_j d`, rel. 1e-6; `H_j` symmetric, its gradient the gradient path's.
 
@@ -31,7 +32,9 @@ struct Scene {
 }
 
 impl Scene {
-    fn new(triangles: bool, basis: TestBasis, master_cells: usize) -> Self {
+    /// With `continued`, the master's facets continued past its open
+    /// edges (triangles only).
+    fn new(triangles: bool, basis: TestBasis, master_cells: usize, continued: bool) -> Self {
         let mut x = Vec::new();
         let slave = patch(
             &mut x,
@@ -59,7 +62,7 @@ impl Scene {
         );
         let c = [0.6 - 0.5 * (a[0] + b[0]), 0.6 - 0.5 * (a[1] + b[1])];
         let first = x.len();
-        let master = patch(
+        let mut master = patch(
             &mut x,
             master_cells,
             master_cells,
@@ -77,6 +80,9 @@ impl Scene {
             for c in 0..3 {
                 p[c] += 0.03 * rng.next();
             }
+        }
+        if continued {
+            master.continue_open_edges(0.5);
         }
         let pairs = candidate_pairs(&slave, &master, &x, 0.3);
         let test = SurfaceTestFunctions::new(&slave, &x, basis);
@@ -125,9 +131,9 @@ fn along(grad: &[(usize, f64)], d: &[[f64; 3]]) -> (f64, f64) {
 #[test]
 fn gradients_match_central_differences() {
     let h = 1e-6;
-    for triangles in [false, true] {
+    for (triangles, continued) in [(false, false), (true, false), (true, true)] {
         for basis in [TestBasis::Standard, TestBasis::Dual] {
-            let scene = Scene::new(triangles, basis, 4);
+            let scene = Scene::new(triangles, basis, 4, continued);
             let g0 = scene.gaps(&scene.x, Derivatives::Gradient);
             let (open, closed) = (
                 g0.values().filter(|w| w.gap > 0.0).count(),
@@ -153,7 +159,7 @@ fn gradients_match_central_differences() {
                 }
             }
             println!(
-                "triangles {triangles}, {basis:?}: {} nodes, largest relative difference {worst:.1e}",
+                "triangles {triangles}, continued {continued}, {basis:?}: {} nodes, largest relative difference {worst:.1e}",
                 g0.len()
             );
         }
@@ -163,8 +169,8 @@ fn gradients_match_central_differences() {
 #[test]
 fn hessians_match_central_differences_of_the_gradients() {
     let h = 1e-6;
-    for triangles in [false, true] {
-        let scene = Scene::new(triangles, TestBasis::Dual, 3);
+    for (triangles, continued) in [(false, false), (true, false), (true, true)] {
+        let scene = Scene::new(triangles, TestBasis::Dual, 3, continued);
         let g0 = scene.gaps(&scene.x, Derivatives::Hessian);
         let plain = scene.gaps(&scene.x, Derivatives::Gradient);
         let mut worst = 0.0f64;
@@ -224,7 +230,7 @@ fn hessians_match_central_differences_of_the_gradients() {
             }
         }
         println!(
-            "triangles {triangles}: Hessians of {} nodes, largest relative difference {worst:.1e}",
+            "triangles {triangles}, continued {continued}: Hessians of {} nodes, largest relative difference {worst:.1e}",
             g0.len()
         );
     }
@@ -233,7 +239,7 @@ fn hessians_match_central_differences_of_the_gradients() {
 #[test]
 fn the_gaps_of_some_nodes_are_those_of_all() {
     for triangles in [false, true] {
-        let scene = Scene::new(triangles, TestBasis::Dual, 4);
+        let scene = Scene::new(triangles, TestBasis::Dual, 4, triangles);
         for d in [Derivatives::Value, Derivatives::Gradient] {
             let all = scene.gaps(&scene.x, d);
             // Every third node with a gap, and a node that has none.

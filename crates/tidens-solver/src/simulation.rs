@@ -143,6 +143,13 @@ const MORTAR_TOUCH_CLOSURE: f64 = 10.0;
 /// 1e-5 R (the augmented Lagrangian takes the rest).
 const PENALTY_CAP: f64 = 1e6;
 
+/// How far a particle's contact surface is continued past the plane of
+/// symmetry that cuts it, as a master in mortar contact, in heights of
+/// the facets there (see `ContactSurface::continue_open_edges`): past the
+/// sliver by which the neighbour's projected edge can stray from the
+/// slave's own.
+const CONTINUATION_REACH: f64 = 0.5;
+
 fn particle_contact(
     scene: &Scene,
     material: &Material,
@@ -166,6 +173,12 @@ fn particle_contact(
         })
         .collect::<Result<Vec<_>, _>>()
         .map_err(|e| SolverError::Unsupported(e.to_string()))?;
+    let mut surfaces = surfaces;
+    if mortar {
+        for s in &mut surfaces {
+            s.continue_open_edges(CONTINUATION_REACH);
+        }
+    }
     // The element size and the search reach come from the particles' own
     // surfaces; their periodic images follow them.
     let images: Vec<ContactSurface> = match &scene.periodic {

@@ -51,7 +51,7 @@ pub fn candidate_pairs(
     search_distance: f64,
 ) -> Vec<(usize, usize)> {
     let masters: Vec<Facet<f64>> = (0..master.facets.len())
-        .map(|f| Facet::of_surface(master, f, x))
+        .map(|f| Facet::of_master(master, f, x))
         .collect();
     let boxes: Vec<Aabb> = masters.iter().map(|f| facet_box(f, 0.0)).collect();
     if boxes.is_empty() {

@@ -142,6 +142,21 @@ impl Facet<f64> {
             x: surface.facets[f].map(|n| Vector3::from(x[n])),
         }
     }
+
+    /// Facet `f` of `surface` as a master: continued past the surface's
+    /// open edges ([`ContactSurface::continue_open_edges`]).
+    pub fn of_master(surface: &ContactSurface, f: usize, x: &[[f64; 3]]) -> Self {
+        let facet = Self::of_surface(surface, f, x);
+        match surface.continuation(f) {
+            None => facet,
+            Some(t) => Facet {
+                trace: facet.trace,
+                x: std::array::from_fn(|a| {
+                    (0..4).fold(Vector3::zeros(), |c, l| c + facet.x[l] * t[a][l])
+                }),
+            },
+        }
+    }
 }
 
 impl<T: AdScalar> Facet<T> {

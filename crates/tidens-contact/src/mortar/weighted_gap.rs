@@ -31,7 +31,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use nalgebra::Vector3;
+use nalgebra::{DMatrix, Vector3};
 use rayon::prelude::*;
 
 use crate::mortar::MortarError;
@@ -43,7 +43,7 @@ use crate::mortar::pair_gradient::pair_gradient;
 use crate::mortar::quadrature::element_rule;
 use crate::mortar::segment::integrate_pair;
 use crate::mortar::trace::{Facet, Trace};
-use crate::surface::ContactSurface;
+use crate::surface::{ContactSurface, Continuation};
 
 /// The stack of the thread that integrates the pairs for Hessians.
 const HESSIAN_STACK: usize = 256 << 20;
@@ -132,7 +132,7 @@ fn pair_contribution(
     derivatives: Derivatives,
 ) -> Result<Option<PairDerivatives>, MortarError> {
     let s = Facet::of_surface(slave, sf, x);
-    let m = Facet::of_surface(master, mf, x);
+    let m = Facet::of_master(master, mf, x);
     let snodes = slave.facets[sf];
     let n: [Vector3<f64>; 4] = snodes.map(|k| normals[&k]);
     let t = &test.facets[sf];
@@ -148,6 +148,9 @@ fn pair_contribution(
     };
     Ok(result.map(|mut p| {
         let (ns, nm) = (s.node_count(), m.node_count());
+        if let Some(t) = master.continuation(mf) {
+            to_master_nodes(&mut p, t, ns, nm);
+        }
         let mnodes = master.facets[mf];
         p.dofs = (0..3 * (ns + nm))
             .map(|i| {
@@ -161,6 +164,44 @@ fn pair_contribution(
             .collect();
         p
     }))
+}
+
+/// The pair's integrals and derivatives over the corners of a continued
+/// master facet (corner `a` = `sum_l t[a][l] y_l`) taken over the facet's
+/// nodes `y_l` instead: `M_jl = sum_a M'_ja t[a][l]`, and the derivatives
+/// by the chain rule (the Jacobian `J` is the identity on the slave's
+/// variables and `t` in each coordinate on the master's).
+fn to_master_nodes(p: &mut PairDerivatives, t: &Continuation, ns: usize, nm: usize) {
+    let m = p.integrals.m;
+    for j in 0..4 {
+        for l in 0..4 {
+            p.integrals.m[j][l] = (0..nm).map(|a| m[j][a] * t[a][l]).sum();
+        }
+    }
+    let jacobian = |i: usize, k: usize| -> f64 {
+        match (i.checked_sub(3 * ns), k.checked_sub(3 * ns)) {
+            (None, None) => f64::from(u8::from(i == k)),
+            (Some(a), Some(l)) if a % 3 == l % 3 => t[a / 3][l / 3],
+            _ => 0.0,
+        }
+    };
+    let n = p.gradient.len() / 12;
+    for block in p.gradient.chunks_mut(n.max(1)) {
+        let old = block.to_vec();
+        for (k, g) in block.iter_mut().enumerate().skip(3 * ns) {
+            *g = (3 * ns..3 * (ns + nm))
+                .map(|i| old[i] * jacobian(i, k))
+                .sum();
+        }
+    }
+    if let Some(h) = p.hessian.as_mut() {
+        for row in h.iter_mut() {
+            for block in row.iter_mut() {
+                let jm = DMatrix::from_fn(block.nrows(), block.ncols(), jacobian);
+                *block = jm.transpose() * &*block * &jm;
+            }
+        }
+    }
 }
 
 /// Adds what pair `p` of slave facet nodes `snodes` and master facet nodes
