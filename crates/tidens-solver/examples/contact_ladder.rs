@@ -6,6 +6,15 @@
 //! CELL: bcc, fcc, sc2; FORMULATION: node-to-facet, mortar. Prints each
 //! step's Newton iterations and the run's totals, and t(0.8), t(0.9),
 //! t(0.95).
+//!
+//! Environment: `LADDER_VERBOSE` prints every step; `LADDER_RTOL`,
+//! `LADDER_PENALTY_FACTOR` set Newton's residual tolerance and the
+//! penalty factor; `LADDER_GAPS` prints the smallest mean gaps at the
+//! start; `LADDER_FD=shift` (and `LADDER_FD_H`) checks the mortar tangent
+//! against finite differences with the second particle moved by `shift`
+//! mm; `LADDER_DEEP=t` runs to the time `t` \[s\] and prints the node
+//! deepest inside another particle, the facet it is under and the mean
+//! gaps of the nodes around it.
 use std::time::Instant;
 use tidens_solver::{
     Cell, ContactFormulation, LoadHistory, MeshOptions, Preset, Scene, Settings, Simulation,
@@ -182,6 +191,47 @@ fn main() {
             }
         }
         println!("tangent vs FD: worst {worst:e} of {scale:e}");
+        return;
+    }
+    if let Some(t_deep) = std::env::var("LADDER_DEEP").ok().and_then(|s| s.parse::<f64>().ok()) {
+        while sim.curve().last().is_none_or(|p| p.time < t_deep) {
+            sim.advance().unwrap();
+        }
+        let c = sim.particle_contact().unwrap();
+        let x = sim.coordinates();
+        let d = c.deepest(&x).unwrap();
+        println!("{d:?}");
+        let sf = &c.surfaces()[d.slave];
+        let n = sf.nodes[d.node];
+        println!("node {n} at {:?}", &x[3 * n..3 * n + 3]);
+        let mf = &c.surfaces()[d.master];
+        for &k in &mf.facets[d.facet] {
+            println!("  master facet node {k} at {:?}", &x[3 * k..3 * k + 3]);
+        }
+        let mut m = c.as_mortar().unwrap().clone();
+        m.pair(&x);
+        let ring: std::collections::BTreeSet<usize> = sf.facets.iter().filter(|f| f.contains(&n)).flatten().copied().collect();
+        for g in m.mean_gaps(&x) {
+            let node = sf.nodes[g.1];
+            if g.0 == d.slave && ring.contains(&node) && g.2 == d.master {
+                println!("  ring node {node} at {:?}: mean gap {:e}", &x[3 * node..3 * node + 3], g.3);
+            }
+            if g.0 == d.slave && g.1 == d.node {
+                println!("mean gap of the node on {}: {:e}", g.2, g.3);
+            }
+        }
+        let ev = m.evaluate(&x, false);
+        for t in &ev.terms {
+            if t.slave == (d.slave, d.node) {
+                println!("term: pressure {} penetration {:e}", t.pressure, t.penetration);
+            }
+        }
+        // Neighbours: slave facets holding the node.
+        for (fi, f) in sf.facets.iter().enumerate() {
+            if f.contains(&n) {
+                println!("  slave facet {fi}: {:?}", f);
+            }
+        }
         return;
     }
     let mut marks = vec![0.8, 0.9, 0.95];
