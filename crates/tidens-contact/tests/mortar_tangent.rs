@@ -78,6 +78,11 @@ enum Mesh {
 
 const MESHES: [Mesh; 3] = [Mesh::Quads, Mesh::QuadsAsTriangles, Mesh::Triangles];
 
+/// The meshes the second derivatives are checked on: the solver's (its
+/// hexahedra's faces as triangles, the tetrahedra's triangles); on
+/// bilinear quads the dual-number Hessian takes 1.5 s a scene.
+const TRIANGLE_MESHES: [Mesh; 2] = [Mesh::QuadsAsTriangles, Mesh::Triangles];
+
 /// A grid of `n x n` quads on the map `(u, v) in [0, 1]^2 -> point`, its
 /// nodes appended to `nodes`; counter-clockwise in `(u, v)`, or the other
 /// way with `flip`.
@@ -364,7 +369,7 @@ fn check_scene(eval: &ContactEvaluation) -> BTreeSet<(usize, usize, usize)> {
 
 #[test]
 fn the_consistent_tangent_is_the_derivative_of_the_force() {
-    for mesh in MESHES {
+    for mesh in TRIANGLE_MESHES {
         for (basis, augmented) in [
             (TestBasis::Standard, false),
             (TestBasis::Standard, true),
@@ -395,7 +400,7 @@ fn the_consistent_tangent_is_the_derivative_of_the_force() {
 
 #[test]
 fn without_curvature_the_tangent_is_the_exact_gauss_newton_part_and_semidefinite() {
-    for mesh in MESHES {
+    for mesh in TRIANGLE_MESHES {
         for augmented in [false, true] {
             let basis = TestBasis::Standard;
             let (c, x) = contact(mesh, basis, false, augmented);

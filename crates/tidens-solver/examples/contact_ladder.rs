@@ -193,7 +193,10 @@ fn main() {
         println!("tangent vs FD: worst {worst:e} of {scale:e}");
         return;
     }
-    if let Some(t_deep) = std::env::var("LADDER_DEEP").ok().and_then(|s| s.parse::<f64>().ok()) {
+    if let Some(t_deep) = std::env::var("LADDER_DEEP")
+        .ok()
+        .and_then(|s| s.parse::<f64>().ok())
+    {
         while sim.curve().last().is_none_or(|p| p.time < t_deep) {
             sim.advance().unwrap();
         }
@@ -210,11 +213,21 @@ fn main() {
         }
         let mut m = c.as_mortar().unwrap().clone();
         m.pair(&x);
-        let ring: std::collections::BTreeSet<usize> = sf.facets.iter().filter(|f| f.contains(&n)).flatten().copied().collect();
+        let ring: std::collections::BTreeSet<usize> = sf
+            .facets
+            .iter()
+            .filter(|f| f.contains(&n))
+            .flatten()
+            .copied()
+            .collect();
         for g in m.mean_gaps(&x) {
             let node = sf.nodes[g.1];
             if g.0 == d.slave && ring.contains(&node) && g.2 == d.master {
-                println!("  ring node {node} at {:?}: mean gap {:e}", &x[3 * node..3 * node + 3], g.3);
+                println!(
+                    "  ring node {node} at {:?}: mean gap {:e}",
+                    &x[3 * node..3 * node + 3],
+                    g.3
+                );
             }
             if g.0 == d.slave && g.1 == d.node {
                 println!("mean gap of the node on {}: {:e}", g.2, g.3);
@@ -223,7 +236,10 @@ fn main() {
         let ev = m.evaluate(&x, false);
         for t in &ev.terms {
             if t.slave == (d.slave, d.node) {
-                println!("term: pressure {} penetration {:e}", t.pressure, t.penetration);
+                println!(
+                    "term: pressure {} penetration {:e}",
+                    t.pressure, t.penetration
+                );
             }
         }
         // Neighbours: slave facets holding the node.

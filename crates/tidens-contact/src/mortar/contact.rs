@@ -52,6 +52,19 @@ use super::{
 };
 use crate::{ContactEvaluation, ContactMode, ContactSettings, ContactSurface, ContactTerm};
 
+/// A slave node's weighted gap read against its state
+/// ([`MortarContact::reading`]).
+struct Reading {
+    /// The node's index in its surface.
+    k: usize,
+    /// `A_j` \[mm^2\].
+    area: f64,
+    /// `p_hat_j` \[mm\].
+    penetration: f64,
+    /// `p_j` \[MPa\].
+    pressure: f64,
+}
+
 /// The weight of each of the two passes over a pair of surfaces.
 const PASS_WEIGHT: f64 = 0.5;
 
@@ -289,6 +302,26 @@ impl MortarContact {
         false
     }
 
+    /// What the weighted gap `g` of a node of slave surface `s` on master
+    /// surface `m` reads as: the node's index in `s`, its area `A_j`, mean
+    /// penetration and pressure (module docs); None where it covers
+    /// nothing.
+    fn reading(&self, s: usize, m: usize, g: &WeightedGap) -> Option<Reading> {
+        let k = self.surfaces[s].nodes.binary_search(&g.node).ok()?;
+        let area = self.area((s, k, m), g);
+        if !(area > 0.0) {
+            return None;
+        }
+        let st = self.node_state((s, k, m));
+        let penetration = -g.gap / area + st.offset;
+        Some(Reading {
+            k,
+            area,
+            penetration,
+            pressure: (st.lambda + self.settings.penalty * penetration).max(0.0),
+        })
+    }
+
     fn node_state(&self, key: Key) -> NodeState {
         self.state.get(&key).copied().unwrap_or_default()
     }
@@ -322,29 +355,18 @@ impl MortarContact {
     /// pressed nodes, and the nodes near a pair of surfaces that presses
     /// nowhere yet), which are a few of those within the band.
     fn gaps_for_terms(&self, x: &[[f64; 3]]) -> Vec<(usize, usize, WeightedGap)> {
-        let eps = self.settings.penalty;
         let band = -NEAR_BAND * self.settings.search_distance;
         let values = self.gaps(x, Derivatives::Value);
-        let reading = |s: usize, m: usize, g: &WeightedGap| -> Option<(usize, f64, f64)> {
-            let k = self.surfaces[s].nodes.binary_search(&g.node).ok()?;
-            let area = self.area((s, k, m), g);
-            if !(area > 0.0) {
-                return None;
-            }
-            let st = self.node_state((s, k, m));
-            let penetration = -g.gap / area + st.offset;
-            Some((k, penetration, (st.lambda + eps * penetration).max(0.0)))
-        };
         let pressed: BTreeSet<(usize, usize)> = values
             .iter()
-            .filter(|(s, m, g)| reading(*s, *m, g).is_some_and(|r| r.2 > 0.0))
+            .filter(|(s, m, g)| self.reading(*s, *m, g).is_some_and(|r| r.pressure > 0.0))
             .map(|(s, m, _)| (*s, *m))
             .collect();
         // The nodes (global ids) whose gradient is needed, by pass.
         let mut needed: BTreeMap<(usize, usize), BTreeSet<usize>> = BTreeMap::new();
         for (s, m, g) in &values {
-            if let Some((_, penetration, pressure)) = reading(*s, *m, g)
-                && (pressure > 0.0 || (penetration > band && !pressed.contains(&(*s, *m))))
+            if let Some(r) = self.reading(*s, *m, g)
+                && (r.pressure > 0.0 || (r.penetration > band && !pressed.contains(&(*s, *m))))
             {
                 needed.entry((*s, *m)).or_default().insert(g.node);
             }
@@ -400,14 +422,12 @@ impl MortarContact {
         let mut terms: Vec<ContactTerm> = gaps
             .into_par_iter()
             .filter_map(|(s, m, g)| {
-                let k = self.surfaces[s].nodes.binary_search(&g.node).ok()?;
-                let area = self.area((s, k, m), &g);
-                if !(area > 0.0) {
-                    return None;
-                }
-                let st = self.node_state((s, k, m));
-                let penetration = -g.gap / area + st.offset;
-                let pressure = (st.lambda + eps * penetration).max(0.0);
+                let Reading {
+                    k,
+                    area,
+                    penetration,
+                    pressure,
+                } = self.reading(s, m, &g)?;
                 if pressure <= 0.0 && penetration <= band {
                     return None;
                 }
@@ -648,14 +668,8 @@ impl MortarContact {
         self.gaps(&points(x), Derivatives::Value)
             .into_iter()
             .filter_map(|(s, m, g)| {
-                let k = self.surfaces[s].nodes.binary_search(&g.node).ok()?;
-                let area = self.area((s, k, m), &g);
-                if !(area > 0.0) {
-                    return None;
-                }
-                let st = self.node_state((s, k, m));
-                let pressure = (st.lambda + eps * (-g.gap / area + st.offset)).max(0.0);
-                Some(PASS_WEIGHT * area / (2.0 * eps) * pressure * pressure)
+                let r = self.reading(s, m, &g)?;
+                Some(PASS_WEIGHT * r.area / (2.0 * eps) * r.pressure * r.pressure)
             })
             .sum()
     }
