@@ -51,8 +51,12 @@
 //! (`1/h`): at 1e-5 and 1e-7 mm the consistent tangent on quads is off
 //! by 1.4e-9 and 5.9e-11.
 
+#[path = "support/mortar_meshes.rs"]
+mod meshes;
+
 use std::collections::{BTreeMap, BTreeSet};
 
+use meshes::{chessboard, grid};
 use nalgebra::DMatrix;
 use tidens_contact::mortar::{
     Derivatives, MortarContact, SurfaceTestFunctions, TestBasis, WeightedGap, candidate_pairs,
@@ -83,50 +87,11 @@ const MESHES: [Mesh; 3] = [Mesh::Quads, Mesh::QuadsAsTriangles, Mesh::Triangles]
 /// bilinear quads the dual-number Hessian takes 1.5 s a scene.
 const TRIANGLE_MESHES: [Mesh; 2] = [Mesh::QuadsAsTriangles, Mesh::Triangles];
 
-/// A grid of `n x n` quads on the map `(u, v) in [0, 1]^2 -> point`, its
-/// nodes appended to `nodes`; counter-clockwise in `(u, v)`, or the other
-/// way with `flip`.
-fn grid(
-    nodes: &mut Vec<[f64; 3]>,
-    n: usize,
-    map: impl Fn(f64, f64) -> [f64; 3],
-    flip: bool,
-) -> Vec<[usize; 4]> {
-    let first = nodes.len();
-    for j in 0..=n {
-        for i in 0..=n {
-            nodes.push(map(i as f64 / n as f64, j as f64 / n as f64));
-        }
-    }
-    let id = |i: usize, j: usize| first + j * (n + 1) + i;
-    let mut quads = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let q = [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)];
-            quads.push(if flip { [q[0], q[3], q[2], q[1]] } else { q });
-        }
-    }
-    quads
-}
-
 fn surface(quads: &[[usize; 4]], n: usize, nodes: &[[f64; 3]], mesh: Mesh) -> ContactSurface {
     match mesh {
         Mesh::Quads => ContactSurface::from_quads(quads, nodes).unwrap(),
         Mesh::QuadsAsTriangles => ContactSurface::from_quads_as_triangles(quads, nodes).unwrap(),
-        Mesh::Triangles => {
-            let triangles: Vec<[usize; 3]> = quads
-                .iter()
-                .enumerate()
-                .flat_map(|(c, q)| {
-                    if (c / n + c % n).is_multiple_of(2) {
-                        [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
-                    } else {
-                        [[q[1], q[2], q[3]], [q[1], q[3], q[0]]]
-                    }
-                })
-                .collect();
-            ContactSurface::from_triangles(&triangles, nodes).unwrap()
-        }
+        Mesh::Triangles => ContactSurface::from_triangles(&chessboard(quads, n), nodes).unwrap(),
     }
 }
 
@@ -136,6 +101,7 @@ fn scene(mesh: Mesh) -> (Vec<[f64; 3]>, Vec<ContactSurface>) {
     let mut nodes = Vec::new();
     let lower = grid(
         &mut nodes,
+        4,
         4,
         |u, v| {
             let (x, y) = (u - 0.5, v - 0.5);
@@ -150,6 +116,7 @@ fn scene(mesh: Mesh) -> (Vec<[f64; 3]>, Vec<ContactSurface>) {
     );
     let upper = grid(
         &mut nodes,
+        3,
         3,
         |u, v| {
             let (s, t) = (u - 0.5, v - 0.5);

@@ -19,6 +19,22 @@ pub fn patch(
     flip: bool,
     triangles: bool,
 ) -> ContactSurface {
+    let quads = grid(x, nx, ny, map, flip);
+    if triangles {
+        ContactSurface::from_triangles(&chessboard(&quads, nx), x).unwrap()
+    } else {
+        ContactSurface::from_quads(&quads, x).unwrap()
+    }
+}
+
+/// The quads of the patch of [`patch`], its nodes appended to `x`.
+pub fn grid(
+    x: &mut Vec<[f64; 3]>,
+    nx: usize,
+    ny: usize,
+    map: impl Fn(f64, f64) -> [f64; 3],
+    flip: bool,
+) -> Vec<[usize; 4]> {
     let first = x.len();
     for j in 0..=ny {
         for i in 0..=nx {
@@ -33,22 +49,23 @@ pub fn patch(
             quads.push(if flip { [q[0], q[3], q[2], q[1]] } else { q });
         }
     }
-    if triangles {
-        let tris: Vec<[usize; 3]> = quads
-            .iter()
-            .enumerate()
-            .flat_map(|(c, q)| {
-                if (c / nx + c % nx).is_multiple_of(2) {
-                    [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
-                } else {
-                    [[q[1], q[2], q[3]], [q[1], q[3], q[0]]]
-                }
-            })
-            .collect();
-        ContactSurface::from_triangles(&tris, x).unwrap()
-    } else {
-        ContactSurface::from_quads(&quads, x).unwrap()
-    }
+    quads
+}
+
+/// Each quad of a grid `nx` quads wide split in two, the diagonals
+/// alternating like a chessboard.
+pub fn chessboard(quads: &[[usize; 4]], nx: usize) -> Vec<[usize; 3]> {
+    quads
+        .iter()
+        .enumerate()
+        .flat_map(|(c, q)| {
+            if (c / nx + c % nx).is_multiple_of(2) {
+                [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
+            } else {
+                [[q[1], q[2], q[3]], [q[1], q[3], q[0]]]
+            }
+        })
+        .collect()
 }
 
 /// The point `c + u a + v b`.
