@@ -1,9 +1,13 @@
 //! Particle-particle contact (issue: contact between particles, every cell).
 
+#[path = "support/cells.rs"]
+mod cells;
+
+use cells::stacked_pair;
 use tidens_fem::ElementKind;
 use tidens_solver::{
-    Cell, ContactFormulation, ContactMode, LoadHistory, MeshOptions, Octant, Preset, Scene,
-    Settings, Simulation, Status,
+    Cell, ContactFormulation, ContactMode, LoadHistory, MeshOptions, Preset, Scene, Settings,
+    Simulation, Status,
 };
 
 fn press(cell: &Cell, level: u32, until_density: f64, mode: ContactMode) -> (Scene, Simulation) {
@@ -38,22 +42,6 @@ fn press_with(
     settings.contact.mode = mode;
     let sim = Simulation::new(&scene, Preset::Ti64Creep1293K.material(), settings).unwrap();
     (scene, sim)
-}
-
-/// Two octants stacked along z touching at their poles: the sc cell doubled
-/// along the load. Their contact plane is the mirror plane of the sc cell.
-fn stacked_pair(radius: f64) -> Cell {
-    let oct = |top| Octant {
-        corner: [false, false, top],
-        a: radius,
-        c: radius,
-    };
-    Cell::new(
-        "stacked pair",
-        [radius, radius, 2.0 * radius],
-        vec![oct(false), oct(true)],
-    )
-    .unwrap()
 }
 
 /// Two identical octants pressed together along an axis deform

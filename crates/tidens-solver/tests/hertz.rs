@@ -120,11 +120,15 @@
 //!
 //! The ladder is `hertz_ladder` (ignored, 12 minutes).
 
+#[path = "support/cells.rs"]
+mod cells;
+
+use cells::stacked_pair;
 use std::f64::consts::PI;
 use std::time::Instant;
 use tidens_solver::{
-    Cell, ContactFormulation, ElementKind, LoadHistory, Material, MeshOptions, Octant, Preset,
-    Scene, Settings, Simulation,
+    ContactFormulation, ElementKind, LoadHistory, Material, MeshOptions, Preset, Scene, Settings,
+    Simulation,
 };
 
 /// Sphere radius R \[mm\].
@@ -291,22 +295,6 @@ fn centre_correction(f: f64) -> f64 {
     2.0 * sphere_pole_compression(f) - hertz_approach(f)
 }
 
-/// Two sphere octants stacked along z touching at their poles
-/// (`tests/contact.rs`).
-fn stacked_pair() -> Cell {
-    let octant = |top| Octant {
-        corner: [false, false, top],
-        a: R,
-        c: R,
-    };
-    Cell::new(
-        "stacked pair",
-        [R, R, 2.0 * R],
-        vec![octant(false), octant(true)],
-    )
-    .unwrap()
-}
-
 /// One elastic pressing of the stacked pair.
 struct Pressed {
     /// The force through the contact of the whole spheres \[N\].
@@ -341,7 +329,7 @@ fn press(
         grading,
         exact_volume: false,
     };
-    let mut scene = Scene::from_cell(&stacked_pair(), &options)
+    let mut scene = Scene::from_cell(&stacked_pair(R), &options)
         .unwrap()
         .with_element(kind)
         .unwrap();
